@@ -1,0 +1,121 @@
+"""The double-loop sliding-mode controller: BTINTSMC position loop -> ABFSMC attitude loop."""
+
+import math
+
+from nfmr_dlsmc.angles import wrap_angle
+from nfmr_dlsmc.gains import DlsmcConfig
+from nfmr_dlsmc.inner_loop import AbfsmcInnerLoop
+from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
+from nfmr_dlsmc.saturation import saturate_inputs
+
+
+class DlsmcController:
+    """The cascade of Fig. 2 for one robot, stepped once per control period ``config.dt``.
+
+    Each step:
+
+    1. errors in the global frame, x_e = x - x_d, y_e = y - y_d (eq. 8);
+    2. outer loop (eqs 32-35) -> (u_x, u_y); v = sqrt(u_x^2 + u_y^2) and
+       theta_d = atan2(u_y, u_x) (eq. 40);
+    3. thetadot_d as the backward difference of the wrapped theta_d over one period
+       (design.md point 5; 0 at the first step);
+    4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10); inner loop (eqs 11-13) -> omega;
+    5. saturation v in [v_min, v_max], |omega| <= omega_max.
+
+    Attributes (after a step)
+    -------------------------
+    x_e, y_e : float
+        Position errors [m].
+    theta_d, thetadot_d : float
+        Desired heading [rad] and its rate [rad/s].
+    s_theta : float
+        Attitude sliding variable = theta_e [rad].
+    v_raw, omega_raw : float
+        Inputs before saturation [m/s], [rad/s].
+    v_saturated, omega_saturated : bool
+        Saturation flags.
+    outer, inner : BtintsmcOuterLoop, AbfsmcInnerLoop
+        The two loops, with their own step attributes (s_x, s_y, eta_hat, phase, ...).
+    """
+
+    name = "dlsmc"
+    #: Names of the values :meth:`telemetry` returns, in order.
+    TELEMETRY_FIELDS = ("x_e", "y_e", "theta_d", "thetadot_d", "theta_e", "s_x", "s_y",
+                        "eta_hat", "inner_phase", "v_raw", "omega_raw", "v_saturated",
+                        "omega_saturated")
+
+    __slots__ = ("_config", "_limits", "_dt", "outer", "inner", "_has_previous", "x_e", "y_e", "theta_d",
+                 "thetadot_d", "s_theta", "v_raw", "omega_raw", "v_saturated", "omega_saturated")
+
+    def __init__(self, config: DlsmcConfig | None = None):
+        config = DlsmcConfig() if config is None else config
+        self.outer = BtintsmcOuterLoop(config.outer, config.dt)
+        self.inner = AbfsmcInnerLoop(config.inner, config.dt)
+        self.config = config
+        self.reset()
+
+    @property
+    def config(self) -> DlsmcConfig:
+        """The configuration in use; assigning a new one takes effect at the next step
+        and keeps the loops' state (integrals, e(0), adaptive phase)."""
+        return self._config
+
+    @config.setter
+    def config(self, config: DlsmcConfig) -> None:
+        self._config = config
+        self._limits = config.limits
+        self._dt = config.dt
+        self.outer.gains = config.outer
+        self.inner.gains = config.inner
+        self.outer.dt = self.inner.dt = config.dt
+
+    def reset(self) -> None:
+        """Start over: the next step is t = 0 of a new run."""
+        self.outer.reset()
+        self.inner.reset()
+        self._has_previous = False
+        self.x_e = self.y_e = 0.0
+        self.theta_d = self.thetadot_d = self.s_theta = 0.0
+        self.v_raw = self.omega_raw = 0.0
+        self.v_saturated = self.omega_saturated = False
+
+    def step(self, x: float, y: float, theta: float,
+             x_d: float, y_d: float, xdot_d: float, ydot_d: float) -> tuple[float, float]:
+        """One control period.
+
+        Parameters
+        ----------
+        x, y, theta : float
+            Measured pose of point P [m, m, rad].
+        x_d, y_d, xdot_d, ydot_d : float
+            Reference position [m] and velocity [m/s] at this instant.
+
+        Returns
+        -------
+        v, omega : float
+            Saturated inputs [m/s], [rad/s].
+        """
+        x_e = x - x_d
+        y_e = y - y_d
+        u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d)
+        theta_d = math.atan2(u_y, u_x)
+        if self._has_previous:
+            thetadot_d = wrap_angle(theta_d - self.theta_d) / self._dt
+        else:
+            thetadot_d = 0.0
+            self._has_previous = True
+        s_theta = wrap_angle(theta - theta_d)
+        omega_raw = self.inner.step(s_theta, thetadot_d)
+        v_raw = math.hypot(u_x, u_y)
+        v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
+            v_raw, omega_raw, self._limits)
+        self.x_e, self.y_e = x_e, y_e
+        self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
+        self.v_raw, self.omega_raw = v_raw, omega_raw
+        return v, omega
+
+    def telemetry(self) -> tuple:
+        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
+                self.outer.s_x, self.outer.s_y, self.inner.eta_hat, self.inner.phase,
+                self.v_raw, self.omega_raw, self.v_saturated, self.omega_saturated)

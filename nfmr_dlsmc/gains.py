@@ -1,0 +1,146 @@
+"""Frozen, validated gain sets of the DLSMC (paper section 4.1 defaults).
+
+Each dataclass validates itself on construction and raises
+:class:`~nfmr_dlsmc.validation.ParameterError` naming the parameter (with its YAML /
+ROS parameter prefix, e.g. ``outer.C1``), the value and the rule. The same classes guard
+parameter files and live parameter changes.
+"""
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import ClassVar
+
+from nfmr_dlsmc.validation import (ParameterError, check_exponent_pair, check_finite,
+                                   check_greater, check_positive)
+
+
+@dataclass(frozen=True)
+class OuterLoopGains:
+    """Gains of the BTINTSMC position loop, eqs (32)-(35).
+
+    Attributes
+    ----------
+    C1, C2 : float
+        Bounded-rate coefficients of the x and y axes [m/s] (eqs 34, 35).
+    k2 : float
+        Reaching gain [m^(1 - q3/p3)/s] of the terminal term (eqs 34, 35).
+    h : float
+        Slope of erf in the reaching term [1/m] (design.md point 4: h = 1).
+    xi : float
+        Boundary between the full-speed and the stable-tracking phase [m] (eq. 33).
+    p2, q2 : int
+        Odd exponents of alpha, eq. (33); 1 < p2/q2 < 2.
+    p3, q3 : int
+        Odd exponents of the reaching term, eqs (34), (35); 1 < p3/q3 < 2.
+    """
+
+    prefix: ClassVar[str] = "outer"
+
+    C1: float = 0.6
+    C2: float = 0.6
+    k2: float = 1.0
+    h: float = 1.0
+    xi: float = 0.5
+    p2: int = 33
+    q2: int = 17
+    p3: int = 33
+    q3: int = 17
+
+    def __post_init__(self):
+        n = self.prefix
+        check_positive(f"{n}.C1", self.C1, "m/s")
+        check_positive(f"{n}.C2", self.C2, "m/s")
+        check_positive(f"{n}.k2", self.k2)
+        check_positive(f"{n}.h", self.h, "1/m")
+        check_positive(f"{n}.xi", self.xi, "m")
+        check_exponent_pair(f"{n}.p2", self.p2, f"{n}.q2", self.q2)
+        check_exponent_pair(f"{n}.p3", self.p3, f"{n}.q3", self.q3)
+
+
+@dataclass(frozen=True)
+class InnerLoopGains:
+    """Gains of the ABFSMC attitude loop, eqs (11)-(13).
+
+    Attributes
+    ----------
+    k1 : float
+        Terminal reaching gain [rad^(1 - q1/p1)/s] (eq. 11).
+    p1, q1 : int
+        Odd exponents of the reaching term; 1 < p1/q1 < 2.
+    L0 : float
+        Constant adaptation rate of eta_hat before t_bar [rad/s^2] (eq. 12), > 0.
+    L1 : float
+        Error-proportional adaptation rate [1/s^2] (eq. 12), > 1 as Theorem 1 requires.
+    lam : float
+        Barrier-function coefficient lambda [rad/s] (eq. 13), > 0.
+    eps : float
+        Barrier half-width epsilon [rad] (eq. 13), in (0, pi).
+    """
+
+    prefix: ClassVar[str] = "inner"
+
+    k1: float = 1.0
+    p1: int = 33
+    q1: int = 23
+    L0: float = 1.0
+    L1: float = 1.2
+    lam: float = 1.0
+    eps: float = 0.01
+
+    def __post_init__(self):
+        n = self.prefix
+        check_positive(f"{n}.k1", self.k1)
+        check_exponent_pair(f"{n}.p1", self.p1, f"{n}.q1", self.q1)
+        check_positive(f"{n}.L0", self.L0, "rad/s^2")
+        check_greater(f"{n}.L1", self.L1, 1.0, "1/s^2")
+        check_positive(f"{n}.lam", self.lam, "rad/s")
+        eps = check_positive(f"{n}.eps", self.eps, "rad")
+        if eps >= math.pi:
+            raise ParameterError(f"{n}.eps", self.eps, "must be < pi", "rad")
+
+
+@dataclass(frozen=True)
+class InputLimits:
+    """Input saturation: 0 < v_min <= v <= v_max [m/s], |omega| <= omega_max [rad/s]."""
+
+    prefix: ClassVar[str] = "limits"
+
+    v_min: float = 0.2
+    v_max: float = 2.0
+    omega_max: float = 1.59
+
+    def __post_init__(self):
+        n = self.prefix
+        v_min = check_positive(f"{n}.v_min", self.v_min, "m/s")
+        v_max = check_finite(f"{n}.v_max", self.v_max, "m/s")
+        if v_max <= v_min:
+            raise ParameterError(f"{n}.v_max", self.v_max,
+                                 f"must be > {n}.v_min = {v_min:g} m/s", "m/s")
+        check_positive(f"{n}.omega_max", self.omega_max, "rad/s")
+
+
+@dataclass(frozen=True)
+class DlsmcConfig:
+    """Everything the DLSMC cascade needs: both loops, the limits and the period.
+
+    Attributes
+    ----------
+    outer : OuterLoopGains
+    inner : InnerLoopGains
+    limits : InputLimits
+    dt : float
+        Control period [s] (paper: 1 ms).
+    """
+
+    outer: OuterLoopGains = field(default_factory=OuterLoopGains)
+    inner: InnerLoopGains = field(default_factory=InnerLoopGains)
+    limits: InputLimits = field(default_factory=InputLimits)
+    dt: float = 0.001
+
+    def __post_init__(self):
+        check_positive("dt", self.dt, "s")
+
+
+def gain_names(cls) -> list[str]:
+    """The dotted parameter names of a gain dataclass, e.g. ``['outer.C1', ...]``."""
+    return [f"{cls.prefix}.{f.name}" for f in fields(cls)]

@@ -1,0 +1,82 @@
+"""Inner attitude loop: adaptive barrier-function SMC (ABFSMC)."""
+
+from nfmr_dlsmc.gains import InnerLoopGains
+from nfmr_dlsmc.sliding_functions import sig_pow
+
+#: Phases of the adaptive gain eta_hat.
+INTEGRAL_PHASE = 0
+BARRIER_PHASE = 1
+
+
+class AbfsmcInnerLoop:
+    """ABFSMC law of eqs (10)-(13) with the barrier fallback of design.md point 6.
+
+    With s_theta = theta_e (eq. 10) the yaw-rate command is (eq. 11)
+
+        omega = thetadot_d - k1 sign(s)|s|^(q1/p1) - eta_hat sign(s),
+
+    and the adaptive gain (eqs 12, 13) is
+
+        eta_hat = int (L0 + L1 |s|) dtau          until t_bar, the first time |s| <= eps/2,
+        eta_hat = L_b(s) = lam |s| / (eps - |s|)  after t_bar.
+
+    Barrier fallback: the barrier is defined only on (-eps, eps). When, after t_bar, a
+    disturbance or a saturated omega pushes |s| to eps or beyond, the law re-arms t_bar and
+    returns to the integral phase; the integral resumes from the value it had reached when
+    it last left that phase (the gain learned so far is kept). The barrier phase starts again
+    at the next |s| <= eps/2. So the law never divides by zero and never flips sign.
+
+    The integral is a left Riemann sum: eta_hat(0) = 0 and the term of step k enters at
+    step k+1.
+
+    Attributes (after a step)
+    -------------------------
+    eta_hat : float
+        Adaptive gain used in this step [rad/s].
+    phase : int
+        ``INTEGRAL_PHASE`` or ``BARRIER_PHASE``.
+    t_bar_reached : bool
+        True once |s| has reached eps/2 at least once.
+    """
+
+    __slots__ = ("dt", "_gains", "_r1", "_eta_integral", "phase", "eta_hat", "t_bar_reached")
+
+    def __init__(self, gains: InnerLoopGains, dt: float):
+        self.dt = dt  # [s]
+        self.gains = gains
+        self.reset()
+
+    @property
+    def gains(self) -> InnerLoopGains:
+        """The gains in use; assigning new ones takes effect at the next step."""
+        return self._gains
+
+    @gains.setter
+    def gains(self, gains: InnerLoopGains) -> None:
+        self._gains = gains
+        self._r1 = gains.q1 / gains.p1
+
+    def reset(self) -> None:
+        """Back to the integral phase with eta_hat = 0."""
+        self._eta_integral = 0.0  # [rad/s]
+        self.phase = INTEGRAL_PHASE
+        self.eta_hat = 0.0
+        self.t_bar_reached = False
+
+    def step(self, s_theta: float, thetadot_d: float) -> float:
+        """One control period: s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s]."""
+        g = self._gains
+        a = abs(s_theta)
+        if self.phase == BARRIER_PHASE and a >= g.eps:
+            self.phase = INTEGRAL_PHASE  # fallback: re-arm t_bar
+        elif self.phase == INTEGRAL_PHASE and a <= 0.5 * g.eps:
+            self.phase = BARRIER_PHASE  # t_bar reached
+            self.t_bar_reached = True
+        if self.phase == BARRIER_PHASE:
+            eta = g.lam * a / (g.eps - a)
+        else:
+            eta = self._eta_integral
+            self._eta_integral += (g.L0 + g.L1 * a) * self.dt
+        self.eta_hat = eta
+        sign = 1.0 if s_theta > 0.0 else (-1.0 if s_theta < 0.0 else 0.0)
+        return thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * sign

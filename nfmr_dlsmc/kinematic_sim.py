@@ -1,0 +1,125 @@
+"""Closed-loop simulation of the unicycle kinematics (3) under a controller."""
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nfmr_dlsmc.disturbances import YawRateDisturbance
+from nfmr_dlsmc.trajectories import reference_heading
+from nfmr_dlsmc.validation import ParameterError, check_finite, check_positive
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """Time series of one closed-loop run; every array has one entry per control step.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time [s] of each step, t_k = k dt.
+    state : ndarray, shape (N, 3)
+        Pose (x, y, theta) of P at t_k [m, m, rad]; theta is not wrapped.
+    reference : ndarray, shape (N, 4)
+        (x_d, y_d, xdot_d, ydot_d) at t_k [m, m, m/s, m/s].
+    v, omega : ndarray
+        Applied (saturated) inputs over [t_k, t_k+1) [m/s], [rad/s].
+    disturbance : ndarray
+        Yaw-rate disturbance varpi over [t_k, t_k+1) [rad/s].
+    telemetry : dict[str, ndarray]
+        The controller's internal signals (``controller.TELEMETRY_FIELDS``).
+    dt : float
+        Control and integration period [s].
+    final_state : ndarray, shape (3,)
+        Pose at t_N = N dt, after the last step.
+    """
+
+    t: np.ndarray
+    state: np.ndarray
+    reference: np.ndarray
+    v: np.ndarray
+    omega: np.ndarray
+    disturbance: np.ndarray
+    telemetry: dict
+    dt: float
+    final_state: np.ndarray
+
+    @property
+    def distance_error(self) -> np.ndarray:
+        """sqrt(x_e^2 + y_e^2) [m] at each step (the error of Table 2)."""
+        return np.hypot(self.state[:, 0] - self.reference[:, 0],
+                        self.state[:, 1] - self.reference[:, 1])
+
+    @property
+    def theta_r(self) -> np.ndarray:
+        """Reference tangent direction theta_r [rad] at each step, eq. (7)."""
+        return reference_heading(self.reference[:, 2], self.reference[:, 3])
+
+
+def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
+             disturbance: YawRateDisturbance | None = None) -> SimResult:
+    """Run ``controller`` against the kinematics (3) with forward Euler.
+
+    Per step k: the controller sees the pose and the reference at t_k and returns (v, omega);
+    then  x += v cos(theta) dt,  y += v sin(theta) dt,  theta += (omega + varpi(t_k)) dt.
+
+    Parameters
+    ----------
+    controller
+        An object with ``reset()``, ``step(x, y, theta, x_d, y_d, xdot_d, ydot_d) -> (v, w)``,
+        ``telemetry()`` and ``TELEMETRY_FIELDS``, stepped at its own period ``dt``.
+    trajectory
+        An object with ``sample(t) -> (x_d, y_d, xdot_d, ydot_d)`` for arrays ``t``.
+    x0 : sequence of 3 floats
+        Initial pose (x, y, theta) [m, m, rad].
+    duration : float
+        Simulated time [s]; the run has round(duration / dt) steps.
+    dt : float
+        Step [s]; must equal the controller's period when it has one (``config.dt``).
+    disturbance : YawRateDisturbance, optional
+        Yaw-rate disturbance varpi(t); none by default.
+    """
+    dt = check_positive("dt", dt, "s")
+    duration = check_positive("duration", duration, "s")
+    x0 = tuple(x0)
+    if len(x0) != 3:
+        raise ParameterError("x0", x0, "must have 3 entries (x [m], y [m], theta [rad])")
+    x, y, theta = (check_finite(f"x0[{i}]", value) for i, value in enumerate(x0))
+    config = getattr(controller, "config", None)
+    if config is not None and not math.isclose(config.dt, dt):
+        raise ParameterError("dt", dt, f"must equal the controller period {config.dt:g} s", "s")
+    n = int(round(duration / dt))
+    if n < 1:
+        raise ParameterError("duration", duration, f"must cover at least one step of {dt:g} s", "s")
+
+    t = np.arange(n) * dt
+    ref = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
+                           for c in trajectory.sample(t)])
+    dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
+
+    controller.reset()
+    step = controller.step
+    telemetry = controller.telemetry
+    cos, sin = math.cos, math.sin
+    rows = []
+    record = rows.append
+    for (x_d, y_d, xdot_d, ydot_d), varpi in zip(ref.tolist(), dist.tolist()):
+        v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+        record((x, y, theta, v, w) + telemetry())
+        x += v * cos(theta) * dt
+        y += v * sin(theta) * dt
+        theta += (w + varpi) * dt
+
+    columns = _to_array(rows, 5 + len(controller.TELEMETRY_FIELDS)).T
+    return SimResult(
+        t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[4],
+        disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])),
+        dt=dt, final_state=np.array([x, y, theta]))
+
+
+def _to_array(rows: list, width: int) -> np.ndarray:
+    """A list of equal-length tuples -> float array of shape (len(rows), width)."""
+    flat = np.fromiter(itertools.chain.from_iterable(rows), dtype=float,
+                       count=len(rows) * width)
+    return flat.reshape(len(rows), width)

@@ -1,0 +1,80 @@
+"""Outer position loop: bounded time-varying integral nonsingular terminal SMC (BTINTSMC)."""
+
+import math
+
+from nfmr_dlsmc.gains import OuterLoopGains
+from nfmr_dlsmc.sliding_functions import bounded_rate
+
+
+class BtintsmcOuterLoop:
+    """BTINTSMC law of eqs (32)-(35), one instance per robot.
+
+    Per axis e in {x_e, y_e} the sliding variable is (eq. 32)
+
+        s = e - e(0) + C int_0^t alpha(e) dtau,
+
+    so s(0) = 0 (Remark 4), and the virtual velocity inputs are (eqs 34, 35)
+
+        u_x = v_d cos(theta_r) - k2 |s_x|^(q3/p3) erf(h s_x) - C1 alpha(x_e),
+        u_y = v_d sin(theta_r) - k2 |s_y|^(q3/p3) erf(h s_y) - C2 alpha(y_e),
+
+    with v_d cos(theta_r) = xdot_d and v_d sin(theta_r) = ydot_d (eqs 6, 7). The integral
+    is a left Riemann sum over the control period: the term of step k enters at step k+1.
+
+    Attributes (after a step)
+    -------------------------
+    s_x, s_y : float
+        Sliding variables [m].
+    alpha_x, alpha_y : float
+        alpha(x_e), alpha(y_e) of eq. (33) [-].
+    """
+
+    __slots__ = ("dt", "_gains", "_r2", "_r3", "_started", "_ex0", "_ey0", "_int_ax", "_int_ay",
+                 "s_x", "s_y", "alpha_x", "alpha_y")
+
+    def __init__(self, gains: OuterLoopGains, dt: float):
+        self.dt = dt  # [s]
+        self.gains = gains
+        self.reset()
+
+    @property
+    def gains(self) -> OuterLoopGains:
+        """The gains in use; assigning new ones takes effect at the next step."""
+        return self._gains
+
+    @gains.setter
+    def gains(self, gains: OuterLoopGains) -> None:
+        self._gains = gains
+        self._r2 = gains.q2 / gains.p2
+        self._r3 = gains.q3 / gains.p3
+
+    def reset(self) -> None:
+        """Forget e(0) and the integrals; the next step defines e(0)."""
+        self._started = False
+        self._ex0 = 0.0  # [m]
+        self._ey0 = 0.0  # [m]
+        self._int_ax = 0.0  # int alpha(x_e) dt [s]
+        self._int_ay = 0.0  # int alpha(y_e) dt [s]
+        self.s_x = 0.0
+        self.s_y = 0.0
+        self.alpha_x = 0.0
+        self.alpha_y = 0.0
+
+    def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float) -> tuple[float, float]:
+        """One control period: errors [m] and reference velocity [m/s] -> (u_x, u_y) [m/s]."""
+        g = self._gains
+        if not self._started:
+            self._started = True
+            self._ex0, self._ey0 = x_e, y_e
+        r3, k2, h = self._r3, g.k2, g.h
+        ax = bounded_rate(x_e, g.xi, self._r2)
+        ay = bounded_rate(y_e, g.xi, self._r2)
+        s_x = x_e - self._ex0 + g.C1 * self._int_ax
+        s_y = y_e - self._ey0 + g.C2 * self._int_ay
+        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - g.C1 * ax
+        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - g.C2 * ay
+        self._int_ax += ax * self.dt
+        self._int_ay += ay * self.dt
+        self.s_x, self.s_y = s_x, s_y
+        self.alpha_x, self.alpha_y = ax, ay
+        return u_x, u_y

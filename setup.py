@@ -1,0 +1,41 @@
+from glob import glob
+
+from setuptools import setup
+
+package_name = "nfmr_dlsmc"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=["nfmr_dlsmc", "nfmr_sim"],
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{package_name}"]),
+        (f"share/{package_name}", ["package.xml"]),
+        (f"share/{package_name}/config", glob("config/*.yaml")),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.26,<3",
+        "pyyaml>=6,<7",
+        "pybullet>=3.2.6,<4",
+        "mcap>=1.2,<2",
+        "ros-jazzy-rclpy>=7.1,<8",
+        "ros-jazzy-common-interfaces>=5.3,<6",
+        "ros-jazzy-rmw-fastrtps-cpp>=8.4,<9",
+    ],
+    extras_require={
+        "test": ["pytest>=8,<10"],
+    },
+    zip_safe=True,
+    maintainer="nfmr developers",
+    maintainer_email="nfmr@example.org",
+    description="Double-loop sliding-mode trajectory tracking (Zhang et al., Entropy 2023) "
+                "for four-wheel independently steered robots, with a pybullet simulator.",
+    license="Apache-2.0",
+    tests_require=["pytest"],
+    entry_points={
+        "console_scripts": [
+            "nfmr-eval = nfmr_dlsmc.eval_cli:main",
+        ],
+    },
+)

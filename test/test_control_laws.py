@@ -1,0 +1,140 @@
+"""The outer BTINTSMC, the inner ABFSMC and the cascade against hand-computed values."""
+
+import math
+
+import pytest
+
+from nfmr_dlsmc.dlsmc import DlsmcController
+from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
+from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
+
+DT = 0.001
+R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
+
+
+def test_outer_loop_first_two_steps():
+    loop = BtintsmcOuterLoop(OuterLoopGains(), DT)
+    # Step 0: s = 0 (eq. 32 at t = 0), full-speed phase alpha = sign(e).
+    u_x, u_y = loop.step(1.0, 4.0, 0.5, 0.25)
+    assert (loop.s_x, loop.s_y) == (0.0, 0.0)
+    assert u_x == pytest.approx(0.5 - 0.6 * 1.0)
+    assert u_y == pytest.approx(0.25 - 0.6 * 1.0)
+    # Step 1: s = e - e(0) + C alpha(e(0)) dt.
+    u_x, u_y = loop.step(0.999, 3.9, 0.5, 0.25)
+    s_x = 0.999 - 1.0 + 0.6 * DT
+    s_y = 3.9 - 4.0 + 0.6 * DT
+    assert loop.s_x == pytest.approx(s_x)
+    assert loop.s_y == pytest.approx(s_y)
+    assert u_x == pytest.approx(0.5 - abs(s_x) ** R3 * math.erf(s_x) - 0.6)
+    assert u_y == pytest.approx(0.25 - abs(s_y) ** R3 * math.erf(s_y) - 0.6)
+
+
+def test_outer_loop_stable_tracking_phase_uses_sine_rate():
+    gains = OuterLoopGains(C1=0.4, C2=0.8, k2=2.0, h=3.0)
+    loop = BtintsmcOuterLoop(gains, DT)
+    loop.step(0.2, -0.1, 0.0, 0.0)
+    u_x, u_y = loop.step(0.19, -0.12, 0.1, -0.2)
+    a_x0 = math.sin(math.pi / 2 * (0.2 / 0.5) ** R2)
+    a_y0 = -math.sin(math.pi / 2 * (0.1 / 0.5) ** R2)
+    s_x = 0.19 - 0.2 + 0.4 * a_x0 * DT
+    s_y = -0.12 + 0.1 + 0.8 * a_y0 * DT
+    a_x = math.sin(math.pi / 2 * (0.19 / 0.5) ** R2)
+    a_y = -math.sin(math.pi / 2 * (0.12 / 0.5) ** R2)
+    assert u_x == pytest.approx(0.1 - 2.0 * abs(s_x) ** R3 * math.erf(3.0 * s_x) - 0.4 * a_x)
+    assert u_y == pytest.approx(-0.2 - 2.0 * abs(s_y) ** R3 * math.erf(3.0 * s_y) - 0.8 * a_y)
+
+
+def test_inner_loop_integral_phase_accumulates_eta():
+    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
+    w0 = loop.step(0.5, 0.2)
+    assert loop.eta_hat == 0.0 and loop.phase == INTEGRAL_PHASE
+    assert w0 == pytest.approx(0.2 - 0.5 ** R1)
+    w1 = loop.step(-0.4, 0.0)
+    eta = (1.0 + 1.2 * 0.5) * DT
+    assert loop.eta_hat == pytest.approx(eta)
+    assert w1 == pytest.approx(0.4 ** R1 + eta)
+
+
+def test_inner_loop_barrier_phase_value():
+    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
+    loop.step(0.004, 0.0)  # |s| <= eps/2: t_bar reached
+    assert loop.phase == BARRIER_PHASE and loop.t_bar_reached
+    w = loop.step(0.008, 0.3)
+    eta = 1.0 * 0.008 / (0.01 - 0.008)
+    assert loop.eta_hat == pytest.approx(eta)
+    assert w == pytest.approx(0.3 - 0.008 ** R1 - eta)
+
+
+@pytest.mark.parametrize("s_out", [0.01, 0.0100001, 0.05, -0.01, -0.3])
+def test_barrier_fallback_never_divides_by_zero_nor_flips_sign(s_out):
+    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
+    loop.step(0.3, 0.0)
+    loop.step(0.2, 0.0)
+    learned = (1.0 + 1.2 * 0.3) * DT + (1.0 + 1.2 * 0.2) * DT
+    loop.step(0.001, 0.0)  # enters the barrier phase
+    assert loop.phase == BARRIER_PHASE
+    w = loop.step(s_out, 0.0)  # |s| >= eps: fallback to the integral phase
+    assert loop.phase == INTEGRAL_PHASE
+    assert math.isfinite(w)
+    assert loop.eta_hat == pytest.approx(learned)  # the integral resumes where it stopped
+    assert math.copysign(1.0, w) == -math.copysign(1.0, s_out)
+    loop.step(0.004, 0.0)  # back inside eps/2: barrier again
+    assert loop.phase == BARRIER_PHASE
+
+
+def test_inner_loop_drives_s_towards_zero_in_the_band():
+    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
+    loop.step(0.001, 0.0)
+    for s in (0.0099, 0.005, -0.005, -0.0099):
+        w = loop.step(s, 0.0)
+        assert w * s < 0.0  # sdot = omega - thetadot_d has the opposite sign of s
+
+
+def test_cascade_first_step_by_hand():
+    ctrl = DlsmcController()
+    v, w = ctrl.step(1.0, 4.0, 0.0, 0.0, 0.0, 0.5, 0.25)
+    u_x, u_y = 0.5 - 0.6, 0.25 - 0.6
+    theta_d = math.atan2(u_y, u_x)
+    assert ctrl.theta_d == pytest.approx(theta_d)
+    assert ctrl.thetadot_d == 0.0
+    assert v == pytest.approx(math.hypot(u_x, u_y))
+    s_theta = -theta_d  # theta = 0
+    assert ctrl.s_theta == pytest.approx(s_theta)
+    assert w == pytest.approx(-(s_theta ** R1))
+    assert not ctrl.v_saturated and not ctrl.omega_saturated
+
+
+def test_cascade_thetadot_d_is_backward_difference_of_wrapped_angle():
+    ctrl = DlsmcController()
+    ctrl.step(0.0, 0.0, 0.0, -1.0, 0.0001, 0.0, 0.0)  # u = (-0.6, ~+0.01): theta_d just below pi
+    before = ctrl.theta_d
+    ctrl.step(0.0, 0.0, 0.0, -1.0, -0.0001, 0.0, 0.0)  # theta_d just above -pi
+    after = ctrl.theta_d
+    assert before > 3.0 and after < -3.0
+    jump = math.remainder(after - before, 2 * math.pi)
+    assert ctrl.thetadot_d == pytest.approx(jump / DT)
+    assert abs(ctrl.thetadot_d) < 0.1 / DT  # the wrapped step, not ~2 pi / dt
+
+
+def test_cascade_saturates_both_inputs():
+    config = DlsmcConfig(limits=InputLimits(v_min=0.2, v_max=0.3, omega_max=0.5))
+    ctrl = DlsmcController(config)
+    v, w = ctrl.step(10.0, 10.0, 3.0, 0.0, 0.0, 0.5, 0.0)
+    assert v == 0.3 and ctrl.v_raw > 0.3 and ctrl.v_saturated
+    assert abs(w) == 0.5 and abs(ctrl.omega_raw) > 0.5 and ctrl.omega_saturated
+    ctrl = DlsmcController(config)
+    v, _ = ctrl.step(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # on the reference, at rest
+    assert v == 0.2 and ctrl.v_saturated
+
+
+def test_live_config_change_takes_effect_next_step_and_keeps_state():
+    ctrl = DlsmcController()
+    ctrl.step(1.0, 4.0, 0.0, 0.0, 0.0, 0.5, 0.25)
+    ctrl.config = DlsmcConfig(outer=OuterLoopGains(C1=1.2, C2=1.2))
+    ctrl.step(1.0, 4.0, 0.0, 0.0, 0.0, 0.5, 0.25)
+    # e(0) is kept: s = 0 + C1 * alpha * dt with the new C1 on the old integral.
+    assert ctrl.outer.s_x == pytest.approx(1.2 * DT)
+    assert ctrl.v_raw == pytest.approx(math.hypot(
+        0.5 - abs(1.2 * DT) ** R3 * math.erf(1.2 * DT) - 1.2,
+        0.25 - abs(1.2 * DT) ** R3 * math.erf(1.2 * DT) - 1.2))

@@ -1,0 +1,89 @@
+"""The nfmr-eval command line, run as a real process."""
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+def run_eval(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "nfmr_dlsmc.eval_cli", *args],
+                          capture_output=True, text=True, timeout=120, cwd=cwd)
+
+
+def test_console_script_is_installed():
+    assert (Path(sys.executable).parent / "nfmr-eval").exists()
+
+
+def test_acceptance_command_reproduces_table2():
+    proc = run_eval("--controller", "dlsmc", "--trajectory", "sine", "--x0", "1,4,0",
+                    "--duration", "100", "--json")
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    for key in ("iae", "ise", "std", "t_conv", "final_distance", "max_v", "max_abs_omega",
+                "theta_e_iae", "max_abs_theta_e_after_conv"):
+        assert key in result
+    assert result["iae"] == pytest.approx(13.5757, rel=0.025)
+    assert result["ise"] == pytest.approx(37.1057, rel=0.025)
+    assert result["std"] == pytest.approx(0.5938, rel=0.025)
+    assert result["t_conv"] == pytest.approx(7.1, abs=0.3)
+
+
+def test_case2_through_the_cli():
+    proc = run_eval("--x0", f"1,1,{math.pi / 6!r}", "--disturbance", "paper", "--json",
+                    "--duration", "60")
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["max_abs_omega"] <= 1.59
+    assert result["max_abs_theta_e_after_conv"] < 0.01
+    assert result["scenario"]["disturbance"] == "paper"
+
+
+def test_table_shows_paper_column_for_case1_only():
+    proc = run_eval("--duration", "100")
+    assert proc.returncode == 0
+    assert "13.5757" in proc.stdout and "paper" in proc.stdout
+    proc = run_eval("--duration", "20", "--trajectory", "circle")
+    assert proc.returncode == 0
+    assert "13.5757" not in proc.stdout and "IAE of distance" in proc.stdout
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--x0", "1,2"], "--x0"),
+    (["--x0=1,2,nan"], "--x0"),
+    (["--duration", "-5"], "--duration"),
+    (["--dt", "0"], "--dt"),
+    (["--trajectory", "spiral"], "--trajectory"),
+    (["--controller", "lqr"], "--controller"),
+    (["--disturbance", "wind"], "--disturbance"),
+    (["--params", "/nonexistent/p.yaml"], "/nonexistent/p.yaml"),
+])
+def test_invalid_arguments_exit_2_with_one_line(args, needle):
+    proc = run_eval(*args)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0]
+    assert "Traceback" not in proc.stderr
+
+
+def test_invalid_parameter_in_file_is_named(tmp_path):
+    path = tmp_path / "gains.yaml"
+    path.write_text("controller:\n  ros__parameters:\n    inner: {p1: 32}\n")
+    proc = run_eval("--params", str(path))
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == ("nfmr-eval: error: inner.p1 = 32: must be a positive odd "
+                                   "integer")
+
+
+def test_params_file_changes_the_run(tmp_path):
+    path = tmp_path / "slow.yaml"
+    path.write_text("controller:\n  ros__parameters:\n    limits: {v_max: 0.6}\n"
+                    "    trajectory: {name: line}\n")
+    base = json.loads(run_eval("--json").stdout.splitlines()[-1])
+    slow = json.loads(run_eval("--json", "--params", str(path)).stdout.splitlines()[-1])
+    assert base["max_v"] > 0.6
+    assert slow["max_v"] == pytest.approx(0.6)
+    assert slow["scenario"]["trajectory"] == "line"

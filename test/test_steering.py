@@ -1,0 +1,110 @@
+"""Four-wheel steering geometry: mapping, inverse, ICR property, modes and limits."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nfmr_dlsmc.steering import (RobotGeometry, SteerMode, centre_twist,
+                                 front_steer_from_yaw_rate, unicycle_from_wheels,
+                                 wheel_commands, wheel_commands_for_twist,
+                                 yaw_rate_from_front_steer)
+from nfmr_dlsmc.validation import ParameterError
+
+GEOM = RobotGeometry()
+DOUBLE, FRONT = SteerMode(1.0, 0.0), SteerMode(0.0, 1.0)
+CASES = [(1.0, 0.5), (0.2, 1.59), (2.0, -1.59), (0.5, 0.0), (1.3, -0.2), (0.2, -0.05)]
+
+
+@pytest.mark.parametrize("mode", [DOUBLE, FRONT, SteerMode(0.5, 0.5), SteerMode(-0.5, 1.5)])
+@pytest.mark.parametrize("v, omega", CASES)
+def test_round_trip_unicycle_to_wheels_and_back(mode, v, omega):
+    cmd = wheel_commands(v, omega, GEOM, mode)
+    v_back, omega_back, lateral = unicycle_from_wheels(cmd.steer, cmd.wheel_speed, GEOM, mode)
+    assert v_back == pytest.approx(v, abs=1e-12)
+    assert omega_back == pytest.approx(omega, abs=1e-12)
+    assert lateral == pytest.approx(0.0, abs=1e-12)
+    assert not cmd.limited
+
+
+@pytest.mark.parametrize("mode", [DOUBLE, FRONT])
+@pytest.mark.parametrize("v, omega", [c for c in CASES if c[1] != 0.0])
+def test_wheel_headings_are_perpendicular_to_their_icr_radius(mode, v, omega):
+    cmd = wheel_commands(v, omega, GEOM, mode)
+    icr = np.array([mode.zero_slip_offset(GEOM.wheelbase), v / omega])
+    for (px, py), steer, speed in zip(GEOM.wheel_positions, cmd.steer, cmd.wheel_speed):
+        radius = np.array([px, py]) - icr
+        heading = np.array([math.cos(steer), math.sin(steer)])
+        assert np.dot(heading, radius) == pytest.approx(0.0, abs=1e-12)
+        # Drive speed is |omega| times that radius (signed by the direction of travel).
+        assert abs(speed) * GEOM.wheel_radius == pytest.approx(abs(omega) * np.linalg.norm(radius))
+
+
+def test_double_ackermann_rear_mirrors_front_and_front_only_keeps_rear_straight():
+    cmd = wheel_commands(1.0, 0.5, GEOM, DOUBLE)
+    np.testing.assert_allclose(cmd.steer[2:], -cmd.steer[:2], atol=1e-12)
+    assert cmd.steer[0] > cmd.steer[1] > 0.0  # the inner (left) wheel turns more
+    cmd = wheel_commands(1.0, 0.5, GEOM, FRONT)
+    np.testing.assert_allclose(cmd.steer[2:], [0.0, 0.0], atol=1e-12)
+    # Front-only turns about the rear axle: P (x_c) is the rear axle centre.
+    assert FRONT.zero_slip_offset(GEOM.wheelbase) == pytest.approx(-GEOM.wheelbase / 2)
+    assert DOUBLE.zero_slip_offset(GEOM.wheelbase) == 0.0
+
+
+def test_crab_mode_gives_equal_angles_and_no_yaw():
+    crab = SteerMode(-1.0, 2.0)
+    cmd = wheel_commands(0.8, 0.0, GEOM, crab, crab_angle=0.4)
+    np.testing.assert_allclose(cmd.steer, [0.4] * 4)
+    np.testing.assert_allclose(cmd.wheel_speed, [0.8 / GEOM.wheel_radius] * 4)
+    with pytest.raises(ValueError, match="crab mode"):
+        wheel_commands(0.8, 0.1, GEOM, crab)
+
+
+def test_sideways_beyond_ninety_degrees_reverses_the_wheel():
+    cmd = wheel_commands_for_twist(-0.5, 0.1, 0.0, GEOM)
+    assert np.all(np.abs(cmd.steer) <= math.pi / 2)
+    assert np.all(cmd.wheel_speed < 0.0)
+
+
+def test_steer_limit_is_honoured_and_reported():
+    tight = RobotGeometry(steer_limit=0.3)
+    cmd = wheel_commands(0.2, 1.59, tight, DOUBLE)
+    assert cmd.limited
+    assert np.all(np.abs(cmd.steer) <= 0.3 + 1e-12)
+    assert not wheel_commands(1.0, 0.05, tight, DOUBLE).limited
+
+
+def test_stationary_wheels_hold_their_angle():
+    held = [0.1, -0.2, 0.3, -0.4]
+    cmd = wheel_commands_for_twist(0.0, 0.0, 0.0, GEOM, hold_steer=held)
+    np.testing.assert_allclose(cmd.steer, held)
+    np.testing.assert_allclose(cmd.wheel_speed, 0.0)
+
+
+@pytest.mark.parametrize("mode", [DOUBLE, FRONT, SteerMode(0.3, 0.7)])
+def test_eq2_agrees_with_rigid_body_geometry(mode):
+    v, omega = 0.9, 0.7
+    delta_f = front_steer_from_yaw_rate(v, omega, mode, GEOM.wheelbase)
+    assert yaw_rate_from_front_steer(v, delta_f, mode, GEOM.wheelbase) == pytest.approx(omega)
+    vx, vy, w = centre_twist(v, omega, mode, GEOM.wheelbase)
+    # The virtual front wheel on the centre line points along its velocity.
+    assert delta_f == pytest.approx(math.atan2(vy + w * GEOM.wheelbase / 2, vx))
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"j1": 1.5, "j2": -0.5}, "j1"), ({"j1": 1.0, "j2": 1.0}, "j2"),
+    ({"j1": math.nan, "j2": 0.0}, "j1")])
+def test_invalid_steer_modes(kwargs, name):
+    with pytest.raises(ParameterError) as info:
+        SteerMode(**kwargs)
+    assert info.value.parameter == name
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"wheelbase": 0.0}, "geometry.wheelbase"), ({"track": -1.0}, "geometry.track"),
+    ({"wheel_radius": math.inf}, "geometry.wheel_radius"),
+    ({"steer_limit": 2.0}, "geometry.steer_limit")])
+def test_invalid_geometry(kwargs, name):
+    with pytest.raises(ParameterError) as info:
+        RobotGeometry(**kwargs)
+    assert info.value.parameter == name
