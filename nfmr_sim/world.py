@@ -1,0 +1,289 @@
+"""The pybullet world of the 4WIS chassis (no ROS): build, command, step, observe."""
+
+import collections
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pybullet
+from pybullet_utils.bullet_client import BulletClient
+
+from nfmr_dlsmc.steering import WHEEL_NAMES
+from nfmr_sim.urdf import chassis_urdf
+from nfmr_sim.world_config import WorldConfig
+
+STEER_JOINTS = tuple(f"{w}_steer" for w in WHEEL_NAMES)
+DRIVE_JOINTS = tuple(f"{w}_drive" for w in WHEEL_NAMES)
+
+
+@dataclass(frozen=True)
+class PlanarState:
+    """Planar pose and twist of a body point.
+
+    Attributes
+    ----------
+    x, y, yaw : float
+        World pose [m, m, rad].
+    vx, vy : float
+        Velocity in the body frame (forward, left) [m/s].
+    yaw_rate : float
+        [rad/s]
+    """
+
+    x: float
+    y: float
+    yaw: float
+    vx: float
+    vy: float
+    yaw_rate: float
+
+
+@dataclass(frozen=True)
+class StepOutput:
+    """What one physics step produced.
+
+    Attributes
+    ----------
+    time : float
+        Simulated time after the step [s].
+    point_p, centre : PlanarState
+        Ground truth of the tracked point P and of the geometric centre.
+    odometry : PlanarState
+        P as the odometry reports it (noise and latency applied).
+    joint_position, joint_velocity, joint_torque : ndarray (8,)
+        Steer joints FL FR RL RR, then drive joints FL FR RL RR [rad, rad/s, Nm].
+    wheel_normal_force : ndarray (4,)
+        Ground normal force on each wheel [N].
+    active_disturbances : tuple of int
+        Indices of the force pulses acting during the step.
+    drive_torque_saturated : bool
+        Whether any drive joint applied its torque limit.
+    """
+
+    time: float
+    point_p: PlanarState
+    centre: PlanarState
+    odometry: PlanarState
+    joint_position: np.ndarray
+    joint_velocity: np.ndarray
+    joint_torque: np.ndarray
+    wheel_normal_force: np.ndarray
+    active_disturbances: tuple
+    drive_torque_saturated: bool
+
+
+class ChassisWorld:
+    """One pybullet client holding the ground, friction patches and the chassis.
+
+    Parameters
+    ----------
+    config : WorldConfig
+    gui : bool
+        Open pybullet's GUI instead of the DIRECT (headless) client.
+    """
+
+    def __init__(self, config: WorldConfig = WorldConfig(), gui: bool = False):
+        self.config = config
+        self._client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        c = self._client
+        c.setGravity(0.0, 0.0, -9.81)
+        c.setTimeStep(config.physics_dt)
+        c.setPhysicsEngineParameter(deterministicOverlappingPairs=1)
+        friction = config.friction
+        plane = c.createCollisionShape(pybullet.GEOM_PLANE)
+        self._ground = c.createMultiBody(0.0, plane)
+        c.changeDynamics(self._ground, -1, lateralFriction=1.0)
+        for patch in friction.patches:
+            half = [0.5 * (patch.x_max - patch.x_min), 0.5 * (patch.y_max - patch.y_min), 0.0005]
+            shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
+            body = c.createMultiBody(0.0, shape, basePosition=[
+                0.5 * (patch.x_min + patch.x_max), 0.5 * (patch.y_min + patch.y_max), 0.0005])
+            c.changeDynamics(body, -1, lateralFriction=patch.lateral / friction.lateral)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "nfmr_4wis.urdf"
+            path.write_text(chassis_urdf(config.chassis))
+            self._robot = c.loadURDF(str(path), basePosition=[0, 0, config.chassis.wheel_radius],
+                                     flags=pybullet.URDF_USE_INERTIA_FROM_FILE
+                                     | pybullet.URDF_USE_IMPLICIT_CYLINDER)
+        names = {c.getJointInfo(self._robot, j)[1].decode(): j
+                 for j in range(c.getNumJoints(self._robot))}
+        self._steer = [names[n] for n in STEER_JOINTS]
+        self._drive = [names[n] for n in DRIVE_JOINTS]
+        self._joints = self._steer + self._drive
+        for j in self._drive:
+            c.changeDynamics(self._robot, j, lateralFriction=friction.lateral,
+                             rollingFriction=friction.rolling, spinningFriction=friction.spinning)
+        for j in self._steer:
+            c.changeDynamics(self._robot, j, lateralFriction=0.0)
+        c.changeDynamics(self._robot, -1, lateralFriction=0.0, linearDamping=0.0,
+                         angularDamping=0.0)
+        self._rng = np.random.default_rng(config.disturbance.seed)
+        self.reset()
+
+    # -- lifecycle -------------------------------------------------------------------------
+
+    def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
+        """Place P at ``pose`` (x [m], y [m], yaw [rad]) at rest; wheels straight, time 0."""
+        c, cfg = self._client, self.config
+        x, y, yaw = (float(v) for v in pose)
+        offset = cfg.tracked_point_offset
+        cx, cy = x - offset * math.cos(yaw), y - offset * math.sin(yaw)
+        c.resetBasePositionAndOrientation(
+            self._robot, [cx, cy, cfg.chassis.wheel_radius + 0.001],
+            c.getQuaternionFromEuler([0.0, 0.0, yaw]))
+        c.resetBaseVelocity(self._robot, [0, 0, 0], [0, 0, 0])
+        for j in self._joints:
+            c.resetJointState(self._robot, j, 0.0, 0.0)
+        self._time = 0.0
+        self._steps = 0
+        self._steer_target = np.zeros(4)
+        self._steer_applied = np.zeros(4)
+        self._wheel_target = np.zeros(4)
+        self._rng = np.random.default_rng(cfg.disturbance.seed)
+        self._odom_buffer = collections.deque(maxlen=cfg.disturbance.odom_latency_steps + 1)
+        self._apply_motors()
+
+    def close(self) -> None:
+        """Disconnect the pybullet client (idempotent)."""
+        if self._client is not None:
+            self._client.disconnect()
+            self._client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s]."""
+        return self._time
+
+    @property
+    def client(self) -> BulletClient:
+        """The pybullet client (for rendering and inspection)."""
+        return self._client
+
+    @property
+    def robot(self) -> int:
+        """pybullet body id of the chassis."""
+        return self._robot
+
+    # -- commands --------------------------------------------------------------------------
+
+    def set_wheel_commands(self, steer, wheel_speed) -> None:
+        """Steer positions [rad] and drive speeds [rad/s], FL FR RL RR; held until changed.
+
+        Raises
+        ------
+        ValueError
+            Wrong length or a non-finite value; the previous command stays in force.
+        """
+        steer = np.asarray(steer, dtype=float)
+        wheel_speed = np.asarray(wheel_speed, dtype=float)
+        if steer.shape != (4,) or wheel_speed.shape != (4,):
+            raise ValueError(f"expected 4 steer angles and 4 wheel speeds, got "
+                             f"{steer.size} and {wheel_speed.size}")
+        if not (np.all(np.isfinite(steer)) and np.all(np.isfinite(wheel_speed))):
+            raise ValueError("steer angles and wheel speeds must be finite")
+        limit = self.config.chassis.steer_limit
+        self._steer_target = np.clip(steer, -limit, limit)
+        self._wheel_target = wheel_speed
+
+    def brake(self) -> None:
+        """Command zero wheel speed (full drive torque against motion) and hold steering."""
+        self._wheel_target = np.zeros(4)
+        self._steer_target = self._steer_applied.copy()
+
+    # -- stepping --------------------------------------------------------------------------
+
+    def step(self) -> StepOutput:
+        """Advance one physics step and return what it produced."""
+        c, cfg = self._client, self.config
+        self._apply_motors()
+        active = self._apply_disturbances()
+        c.stepSimulation()
+        self._time = (self._steps + 1) * cfg.physics_dt
+        self._steps += 1
+        return self._observe(active)
+
+    def _apply_motors(self) -> None:
+        c, m = self._client, self.config.motors
+        dt = self.config.physics_dt
+        # Steer actuator: first-order lag, then the joint rate limit on the set point.
+        gain = 1.0 if m.steer_lag == 0.0 else min(1.0, dt / m.steer_lag)
+        change = gain * (self._steer_target - self._steer_applied)
+        max_change = m.steer_rate_limit * dt
+        self._steer_applied = self._steer_applied + np.clip(change, -max_change, max_change)
+        c.setJointMotorControlArray(
+            self._robot, self._steer, pybullet.POSITION_CONTROL,
+            targetPositions=self._steer_applied.tolist(),
+            forces=[m.steer_torque_limit] * 4,
+            positionGains=[m.steer_position_gain] * 4, velocityGains=[m.steer_velocity_gain] * 4)
+        c.setJointMotorControlArray(
+            self._robot, self._drive, pybullet.VELOCITY_CONTROL,
+            targetVelocities=self._wheel_target.tolist(), forces=[m.drive_torque_limit] * 4)
+
+    def _apply_disturbances(self) -> tuple:
+        c, d = self._client, self.config.disturbance
+        t = self._time
+        fx, fy, tz = d.constant_force_x, d.constant_force_y, 0.0
+        active = []
+        for i, pulse in enumerate(d.pulses):
+            if pulse.active(t):
+                active.append(i)
+                fx += pulse.force_x
+                fy += pulse.force_y
+                tz += pulse.yaw_torque
+        if fx or fy:
+            pos, _ = c.getBasePositionAndOrientation(self._robot)
+            c.applyExternalForce(self._robot, -1, [fx, fy, 0.0], pos, pybullet.WORLD_FRAME)
+        if tz:
+            c.applyExternalTorque(self._robot, -1, [0.0, 0.0, tz], pybullet.WORLD_FRAME)
+        return tuple(active)
+
+    # -- observation -----------------------------------------------------------------------
+
+    def _planar(self, offset: float) -> tuple[PlanarState, PlanarState]:
+        c = self._client
+        pos, orn = c.getBasePositionAndOrientation(self._robot)
+        lin, ang = c.getBaseVelocity(self._robot)
+        yaw = c.getEulerFromQuaternion(orn)[2]
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        centre = PlanarState(pos[0], pos[1], yaw, lin[0] * cy + lin[1] * sy,
+                             -lin[0] * sy + lin[1] * cy, ang[2])
+        # P = centre + R(yaw) (offset, 0); its velocity adds omega x r = (0, omega * offset).
+        p = PlanarState(pos[0] + offset * cy, pos[1] + offset * sy, yaw, centre.vx,
+                        centre.vy + ang[2] * offset, ang[2])
+        return p, centre
+
+    def _observe(self, active: tuple) -> StepOutput:
+        c, cfg = self._client, self.config
+        point_p, centre = self._planar(cfg.tracked_point_offset)
+        states = c.getJointStates(self._robot, self._joints)
+        position = np.array([s[0] for s in states])
+        velocity = np.array([s[1] for s in states])
+        torque = np.array([s[3] for s in states])
+        normal = np.zeros(4)
+        for contact in c.getContactPoints(bodyA=self._robot):
+            link = contact[3]
+            if link in self._drive:
+                normal[self._drive.index(link)] += contact[9]
+        limit = cfg.motors.drive_torque_limit
+        saturated = bool(np.any(np.abs(torque[4:]) >= 0.999 * limit))
+        return StepOutput(self._time, point_p, centre, self._odometry(point_p), position,
+                          velocity, torque, normal, active, saturated)
+
+    def _odometry(self, truth: PlanarState) -> PlanarState:
+        d = self.config.disturbance
+        if d.odom_position_noise > 0.0 or d.odom_yaw_noise > 0.0:
+            nx, ny = self._rng.normal(0.0, d.odom_position_noise, 2) if d.odom_position_noise else (0.0, 0.0)
+            nyaw = self._rng.normal(0.0, d.odom_yaw_noise) if d.odom_yaw_noise else 0.0
+            truth = PlanarState(truth.x + nx, truth.y + ny,
+                                math.remainder(truth.yaw + nyaw, 2 * math.pi),
+                                truth.vx, truth.vy, truth.yaw_rate)
+        self._odom_buffer.append(truth)
+        return self._odom_buffer[0]
