@@ -36,6 +36,7 @@ setup(
     entry_points={
         "console_scripts": [
             "nfmr-eval = nfmr_dlsmc.eval_cli:main",
+            "sim = nfmr_sim.sim_node:main",
         ],
     },
 )

@@ -208,7 +208,7 @@ class ChassisWorld:
         c.stepSimulation()
         self._time = (self._steps + 1) * cfg.physics_dt
         self._steps += 1
-        return self._observe(active)
+        return self.observe(active)
 
     def _apply_motors(self) -> None:
         c, m = self._client, self.config.motors
@@ -260,7 +260,8 @@ class ChassisWorld:
                         centre.vy + ang[2] * offset, ang[2])
         return p, centre
 
-    def _observe(self, active: tuple) -> StepOutput:
+    def observe(self, active: tuple = ()) -> StepOutput:
+        """The current state as a :class:`StepOutput` (``step`` returns this after stepping)."""
         c, cfg = self._client, self.config
         point_p, centre = self._planar(cfg.tracked_point_offset)
         states = c.getJointStates(self._robot, self._joints)

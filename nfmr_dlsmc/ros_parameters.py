@@ -1,0 +1,58 @@
+"""Declaring a node's parameters from a defaults table and reading them back (rclpy)."""
+
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import InvalidParameterTypeException, ParameterException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from nfmr_dlsmc.validation import ParameterError
+
+
+def _declared_type(default):
+    if isinstance(default, bool):
+        return Parameter.Type.BOOL
+    if isinstance(default, int):
+        return Parameter.Type.INTEGER
+    if isinstance(default, float):
+        return Parameter.Type.DOUBLE
+    if isinstance(default, str):
+        return Parameter.Type.STRING
+    if isinstance(default, (list, tuple)):
+        return Parameter.Type.DOUBLE_ARRAY
+    raise TypeError(f"no ROS parameter type for {default!r}")
+
+
+def declare_parameters(node: Node, defaults: dict, read_only=()) -> dict:
+    """Declare every parameter of ``defaults`` (name -> default) and return the values.
+
+    Parameters given in a ``--params-file`` override the defaults; a value of the wrong
+    type, or a name the node does not know, raises :class:`ParameterError` naming it.
+    """
+    for name in node._parameter_overrides:  # names set by --params-file / -p
+        if name not in defaults and name != "use_sim_time":
+            value = node._parameter_overrides[name].value
+            raise ParameterError(name, value, f"unknown parameter of node '{node.get_name()}'")
+    values = {}
+    for name, default in defaults.items():
+        ptype = _declared_type(default)
+        descriptor = ParameterDescriptor(name=name, type=ptype.value,
+                                         read_only=name in read_only)
+        # An empty list carries no element type: declare those by type alone.
+        initial = ptype if isinstance(default, (list, tuple)) and not default else default
+        try:
+            param = node.declare_parameter(name, initial, descriptor)
+        except (InvalidParameterTypeException, ParameterException) as exc:
+            given = node._parameter_overrides.get(name)
+            shown = given.value if given is not None else None
+            raise ParameterError(name, shown, f"must be of type {ptype.name.lower()} ({exc})") from None
+        values[name] = _plain(param.value, default)
+    return values
+
+
+def _plain(value, default):
+    """rclpy values -> plain Python: arrays as lists, an unset array as the default."""
+    if value is None:
+        return list(default)
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    return list(value) if isinstance(value, (tuple, list)) else value

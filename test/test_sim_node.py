@@ -1,0 +1,187 @@
+"""The sim node in-process with a real executor, talking to a test node over real DDS."""
+
+import math
+import threading
+import time
+
+import pytest
+import rclpy
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Log
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from nfmr_dlsmc.validation import ParameterError
+from nfmr_sim.sim_node import SimNode
+
+QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+
+
+class Driver(Node):
+    """Test peer: records what the sim publishes and sends it commands."""
+
+    def __init__(self, context):
+        super().__init__("driver", context=context)
+        self.odom, self.clock, self.joints, self.logs = [], [], [], []
+        self.new_odom = threading.Condition()
+        self.create_subscription(Odometry, "odom", self._on_odom, QOS)
+        self.create_subscription(Clock, "/clock", self.clock.append, QOS)
+        self.create_subscription(JointState, "joint_states", self.joints.append, QOS)
+        self.create_subscription(Log, "/rosout", self._on_log, QoSProfile(depth=1000))
+        self.steer = self.create_publisher(Float64MultiArray, "steer_position_controller/commands", QOS)
+        self.wheels = self.create_publisher(Float64MultiArray, "wheel_velocity_controller/commands", QOS)
+        self.twist = self.create_publisher(Twist, "cmd_vel", QOS)
+
+    def _on_odom(self, msg):
+        with self.new_odom:
+            self.odom.append(msg)
+            self.new_odom.notify_all()
+
+    def _on_log(self, msg):
+        if msg.name == "sim":
+            self.logs.append(msg.msg)
+
+    def wait_odom(self, count, timeout=10.0):
+        with self.new_odom:
+            assert self.new_odom.wait_for(lambda: len(self.odom) >= count, timeout), \
+                f"only {len(self.odom)} odometry messages"
+
+    def send(self, steer, wheels):
+        self.steer.publish(Float64MultiArray(data=list(steer)))
+        self.wheels.publish(Float64MultiArray(data=list(wheels)))
+
+    def drive(self, steps, steer, wheels):
+        """Lockstep: one command per odometry message."""
+        for _ in range(steps):
+            n = len(self.odom)
+            self.send(steer, wheels)
+            self.wait_odom(n + 1)
+
+
+@pytest.fixture
+def ros_context():
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    yield context
+    rclpy.try_shutdown(context=context)
+
+
+def start(context, **overrides):
+    params = [Parameter(k, value=v) for k, v in overrides.items()]
+    sim = SimNode(context=context, parameter_overrides=params)
+    driver = Driver(context)
+    # One thread serves both nodes (rclpy's multi-threaded executor stalls for 100s of ms).
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(sim)
+    executor.add_node(driver)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    executor.spinner = spinner
+    # Wait for discovery both ways before the sim starts stepping.
+    deadline = time.monotonic() + 10.0
+    while (driver.count_publishers("odom") == 0 or sim.count_publishers(
+            "wheel_velocity_controller/commands") == 0) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    sim.start()
+    return sim, driver, executor
+
+
+def stop(sim, driver, executor):
+    sim.stop()
+    executor.shutdown()
+    executor.spinner.join(timeout=5.0)
+    sim.destroy_node()
+    driver.destroy_node()
+
+
+def wait_for(predicate, timeout=10.0):
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, "condition not met in time"
+        time.sleep(0.01)
+
+
+def test_lockstep_commands_in_odometry_out(ros_context):
+    sim, driver, executor = start(ros_context, lockstep_timeout=1.0)
+    try:
+        driver.wait_odom(1)
+        driver.drive(1500, [0.0] * 4, [1.0 / 0.14] * 4)
+        last = driver.odom[-1]
+        assert last.header.frame_id == "odom" and last.child_frame_id == "base_link"
+        assert last.twist.twist.linear.x == pytest.approx(1.0, abs=0.02)
+        assert last.pose.pose.position.x > 0.8
+        # Exactly one physics step per command: sim time = steps * 1 ms.
+        stamp = last.header.stamp.sec + last.header.stamp.nanosec * 1e-9
+        assert stamp == pytest.approx(sim.steps * 0.001, abs=1e-9)
+        assert sim.steps == 1500
+        wait_for(lambda: len(driver.clock) >= 1501 and len(driver.joints) >= 150)
+        assert list(driver.joints[-1].name[:2]) == ["front_left_steer", "front_right_steer"]
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_cmd_vel_goes_through_the_steering_geometry(ros_context):
+    sim, driver, executor = start(ros_context, lockstep_timeout=1.0)
+    try:
+        driver.wait_odom(1)
+        for _ in range(3000):
+            n = len(driver.odom)
+            driver.twist.publish(Twist(linear=type(Twist().linear)(x=0.8),
+                                       angular=type(Twist().angular)(z=0.4)))
+            driver.wait_odom(n + 1)
+        twist = driver.odom[-1].twist.twist
+        assert twist.linear.x == pytest.approx(0.8, rel=0.05)
+        assert twist.angular.z == pytest.approx(0.4, rel=0.05)
+        assert abs(twist.linear.y) < 0.02 * 0.8  # P does not slip sideways
+    finally:
+        stop(sim, driver, executor)
+
+
+@pytest.mark.parametrize("steer, wheels, reason", [
+    ([0.0] * 4, [7.0] * 3, "has 3 values"),
+    ([0.0] * 4, [math.nan] * 4, "NaN or inf"),
+    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, "NaN or inf"),
+])
+def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reason):
+    sim, driver, executor = start(ros_context, lockstep_timeout=0.005)
+    try:
+        driver.wait_odom(1)
+        driver.drive(1000, [0.0] * 4, [7.0] * 4)
+        assert driver.odom[-1].twist.twist.linear.x > 0.9
+        driver.drive(1500, steer, wheels)  # keeps sending the bad command
+        assert abs(driver.odom[-1].twist.twist.linear.x) < 0.05
+        wait_for(lambda: any(reason in m for m in driver.logs))
+        braking = [m for m in driver.logs if m.startswith("braking: rejected")]
+        assert len(braking) == 1 and reason in braking[0]
+        driver.drive(500, [0.0] * 4, [7.0] * 4)  # valid again: drives on
+        assert driver.odom[-1].twist.twist.linear.x > 0.3
+        wait_for(lambda: any("resumed" in m for m in driver.logs))
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_commands_that_stop_arriving_brake_the_robot(ros_context):
+    sim, driver, executor = start(ros_context, lockstep_timeout=0.002, command_timeout=0.1)
+    try:
+        driver.wait_odom(1)
+        driver.drive(1000, [0.0] * 4, [7.0] * 4)
+        n = len(driver.odom)
+        driver.wait_odom(n + 2500, timeout=30.0)  # the sim goes on by lockstep timeouts
+        assert abs(driver.odom[-1].twist.twist.linear.x) < 0.05
+        timeouts = [m for m in driver.logs if "no valid command" in m]
+        assert len(timeouts) == 1 and "timeout 0.1 s" in timeouts[0]
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_invalid_parameters_stop_the_node(ros_context):
+    with pytest.raises(ParameterError, match="mode = 'fast'"):
+        SimNode(context=ros_context, parameter_overrides=[Parameter("mode", value="fast")])
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        SimNode(context=ros_context, parameter_overrides=[Parameter("motor.rated", value=1.0)])
