@@ -16,6 +16,7 @@ setup(
     python_requires=">=3.10",
     install_requires=[
         "numpy>=1.26,<3",
+        "matplotlib>=3.7,<4",
         "pyyaml>=6,<7",
         "pybullet>=3.2.6,<4",
         "mcap>=1.2,<2",

@@ -31,7 +31,7 @@ from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
 from nfmr_sim.ros_messages import odometry_message, time_message
 from nfmr_sim.world import DRIVE_JOINTS, STEER_JOINTS, ChassisWorld
 
-READ_ONLY = ("mode", "physics_dt")
+READ_ONLY = ("mode", "physics_dt", "gui")
 
 
 class SimNode(Node):
@@ -41,7 +41,7 @@ class SimNode(Node):
         super().__init__("sim", **kwargs)
         self.settings = sim_settings(declare_parameters(self, sim_parameter_defaults(), READ_ONLY))
         world_cfg = self.settings.world
-        self.world = ChassisWorld(world_cfg)
+        self.world = ChassisWorld(world_cfg, gui=self.settings.gui)
         self.world.reset(self.settings.initial_pose)
         chassis = world_cfg.chassis
         geometry = RobotGeometry(chassis.wheelbase, chassis.track, chassis.wheel_radius,

@@ -35,6 +35,8 @@ class SimSettings:
         and /clock every step.
     initial_pose : tuple
         Start pose of P (x [m], y [m], yaw [rad]).
+    gui : bool
+        Open pybullet's GUI window instead of the headless DIRECT client.
     """
 
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -43,6 +45,7 @@ class SimSettings:
     command_timeout: float = 0.1
     aux_publish_every: int = 10
     initial_pose: tuple = (0.0, 0.0, 0.0)
+    gui: bool = False
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -57,6 +60,8 @@ class SimSettings:
                                  "must be [x, y, yaw] (3 numbers)")
         for i, value in enumerate(self.initial_pose):
             check_finite(f"initial_pose[{i}]", value)
+        if not isinstance(self.gui, bool):
+            raise ParameterError("gui", self.gui, "must be true or false")
 
 
 def _scalar_fields(prefix, cls, skip=()):
@@ -68,7 +73,8 @@ def sim_parameter_defaults() -> dict:
     """Every sim parameter with its default value (the ROS declaration list)."""
     defaults = {"mode": "lockstep", "physics_dt": 0.001, "lockstep_timeout": 0.5,
                 "command_timeout": 0.1, "aux_publish_every": 10,
-                "initial_pose": [0.0, 0.0, 0.0], "steering.j1": 1.0, "steering.j2": 0.0}
+                "initial_pose": [0.0, 0.0, 0.0], "gui": False,
+                "steering.j1": 1.0, "steering.j2": 0.0}
     chassis = _scalar_fields("chassis", ChassisConfig)
     chassis["chassis.yaw_inertia"] = 0.0  # 0: that of a uniform box
     defaults.update(chassis)
@@ -118,4 +124,4 @@ def sim_settings(flat: dict) -> SimSettings:
     return SimSettings(world=world, mode=p["mode"], lockstep_timeout=p["lockstep_timeout"],
                        command_timeout=p["command_timeout"],
                        aux_publish_every=p["aux_publish_every"],
-                       initial_pose=tuple(p["initial_pose"]))
+                       initial_pose=tuple(p["initial_pose"]), gui=p["gui"])

@@ -84,7 +84,8 @@ class ChassisWorld:
         Open pybullet's GUI instead of the DIRECT (headless) client.
     """
 
-    def __init__(self, config: WorldConfig = WorldConfig(), gui: bool = False):
+    def __init__(self, config: WorldConfig | None = None, gui: bool = False):
+        config = WorldConfig() if config is None else config
         self.config = config
         self._client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self._client

@@ -193,3 +193,22 @@ def test_invalid_world_parameters_are_named(factory, name):
     with pytest.raises(ParameterError) as info:
         factory()
     assert info.value.parameter == name
+
+
+def test_sim_parameters_build_the_world_and_name_bad_values():
+    from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
+
+    settings = sim_settings({"disturbance.pulses": [5.0, 0.5, 0.0, 0.0, 100.0],
+                             "friction.patches": [0.0, 1.0, -1.0, 1.0, 0.3],
+                             "steering.j1": 0.0, "steering.j2": 1.0})
+    assert settings.world.disturbance.pulses == (ForcePulse(5.0, 0.5, 0.0, 0.0, 100.0),)
+    assert settings.world.friction.patches == (FrictionPatch(0.0, 1.0, -1.0, 1.0, 0.3),)
+    assert settings.world.tracked_point_offset == pytest.approx(-0.445)
+    assert sim_settings({}) == sim_settings(sim_parameter_defaults())
+    for flat, name in (({"disturbance.pulses": [1.0, 2.0]}, "disturbance.pulses"),
+                       ({"mode": "fast"}, "mode"), ({"physics_dt": 0.5}, "physics_dt"),
+                       ({"initial_pose": [0.0, 1.0]}, "initial_pose"),
+                       ({"chassis.yaw": 1.0}, "chassis.yaw")):
+        with pytest.raises(ParameterError) as info:
+            sim_settings(flat)
+        assert info.value.parameter == name

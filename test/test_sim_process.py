@@ -1,0 +1,56 @@
+"""The sim executable as a real process: parameter file in, odometry out, clean exit."""
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import rclpy
+from nav_msgs.msg import Odometry
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+SIM = str(Path(sys.executable).parent / "sim")
+
+
+def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
+    config = request.config.rootpath / "config" / "paper_case1.yaml"
+    proc = subprocess.Popen([SIM, "--ros-args", "--params-file", str(config), "-p", "mode:=realtime"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = Node("listener", context=context)
+    got = []
+    node.create_subscription(Odometry, "odom", got.append,
+                             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    try:
+        deadline = time.monotonic() + 30.0
+        while not got and time.monotonic() < deadline and proc.poll() is None:
+            executor.spin_once(timeout_sec=0.1)
+        assert got, "no odometry from the sim process"
+        pose = got[-1].pose.pose.position
+        assert (pose.x, pose.y) == pytest.approx((1.0, 4.0), abs=0.01)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=10)
+    assert proc.returncode == 0, out
+
+
+@pytest.mark.parametrize("arg, needle", [
+    ("mode:=fast", "mode = 'fast'"),
+    ("physics_dt:=1", "physics_dt = 1: must be of type double"),
+    ("motors.rated:=1.0", "motors.rated = 1.0: unknown parameter"),
+])
+def test_invalid_parameter_stops_the_process_with_its_name(arg, needle):
+    proc = subprocess.run([SIM, "--ros-args", "-p", arg], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 2
+    assert needle in proc.stderr
+    assert "Traceback" not in proc.stderr
