@@ -37,6 +37,14 @@ def check_positive(name: str, value, unit: str = "") -> float:
     return number
 
 
+def check_non_negative(name: str, value, unit: str = "") -> float:
+    """A finite number >= 0."""
+    number = check_finite(name, value, unit)
+    if number < 0.0:
+        raise ParameterError(name, value, "must be >= 0", unit)
+    return number
+
+
 def check_greater(name: str, value, bound: float, unit: str = "") -> float:
     """A finite number > ``bound``."""
     number = check_finite(name, value, unit)

@@ -3,7 +3,8 @@
 from dataclasses import dataclass, field
 
 from nfmr_dlsmc.steering import SteerMode
-from nfmr_dlsmc.validation import ParameterError, check_finite, check_positive
+from nfmr_dlsmc.validation import (ParameterError, check_finite, check_non_negative,
+                                   check_positive)
 from nfmr_sim.urdf import ChassisConfig
 
 
@@ -37,8 +38,7 @@ class MotorConfig:
         for name in ("rated_torque", "drive_gear_ratio", "steer_gear_ratio",
                      "steer_rate_limit", "steer_position_gain", "steer_velocity_gain"):
             check_positive(f"motors.{name}", getattr(self, name))
-        if check_finite("motors.steer_lag", self.steer_lag, "s") < 0.0:
-            raise ParameterError("motors.steer_lag", self.steer_lag, "must be >= 0", "s")
+        check_non_negative("motors.steer_lag", self.steer_lag, "s")
 
     @property
     def drive_torque_limit(self) -> float:
@@ -98,8 +98,7 @@ class FrictionConfig:
     def __post_init__(self):
         check_positive("friction.lateral", self.lateral)
         for name in ("rolling", "spinning"):
-            if check_finite(f"friction.{name}", getattr(self, name), "m") < 0.0:
-                raise ParameterError(f"friction.{name}", getattr(self, name), "must be >= 0", "m")
+            check_non_negative(f"friction.{name}", getattr(self, name), "m")
 
 
 @dataclass(frozen=True)
@@ -167,8 +166,7 @@ class DisturbanceConfig:
         check_finite("disturbance.constant_force_x", self.constant_force_x, "N")
         check_finite("disturbance.constant_force_y", self.constant_force_y, "N")
         for name, unit in (("odom_position_noise", "m"), ("odom_yaw_noise", "rad")):
-            if check_finite(f"disturbance.{name}", getattr(self, name), unit) < 0.0:
-                raise ParameterError(f"disturbance.{name}", getattr(self, name), "must be >= 0", unit)
+            check_non_negative(f"disturbance.{name}", getattr(self, name), unit)
         for name in ("odom_latency_steps", "seed"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
