@@ -25,7 +25,7 @@ setup(
         "ros-jazzy-rmw-fastrtps-cpp>=8.4,<9",
     ],
     extras_require={
-        "test": ["pytest>=8,<10"],
+        "test": ["pytest>=8,<10", "mcap-ros2-support>=0.5,<0.7", "rosbags>=0.10,<0.12"],
     },
     zip_safe=True,
     maintainer="nfmr developers",
@@ -38,6 +38,8 @@ setup(
         "console_scripts": [
             "nfmr-eval = nfmr_dlsmc.eval_cli:main",
             "sim = nfmr_sim.sim_node:main",
+            "controller = nfmr_dlsmc.controller_node:main",
+            "nfmr-run = nfmr_dlsmc.launcher:main",
         ],
     },
 )

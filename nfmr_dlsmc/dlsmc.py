@@ -18,7 +18,8 @@ class DlsmcController:
     2. outer loop (eqs 32-35) -> (u_x, u_y); v = sqrt(u_x^2 + u_y^2) and
        theta_d = atan2(u_y, u_x) (eq. 40);
     3. thetadot_d as the backward difference of the wrapped theta_d over one period
-       (design.md point 5; 0 at the first step);
+       (design.md point 5; 0 at the first step), optionally low-pass filtered with time
+       constant ``config.thetadot_filter`` (0 by default: the raw difference);
     4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10); inner loop (eqs 11-13) -> omega;
     5. saturation v in [v_min, v_max], |omega| <= omega_max.
 
@@ -44,13 +45,13 @@ class DlsmcController:
                         "eta_hat", "inner_phase", "v_raw", "omega_raw", "v_saturated",
                         "omega_saturated")
 
-    __slots__ = ("_config", "_limits", "_dt", "outer", "inner", "_has_previous", "x_e", "y_e", "theta_d",
+    __slots__ = ("_config", "_limits", "_dt", "_filter_gain", "outer", "inner", "_has_previous", "x_e", "y_e", "theta_d",
                  "thetadot_d", "s_theta", "v_raw", "omega_raw", "v_saturated", "omega_saturated")
 
     def __init__(self, config: DlsmcConfig | None = None):
         config = DlsmcConfig() if config is None else config
         self.outer = BtintsmcOuterLoop(config.outer, config.dt)
-        self.inner = AbfsmcInnerLoop(config.inner, config.dt)
+        self.inner = AbfsmcInnerLoop(config.inner, config.dt, config.limits.omega_max)
         self.config = config
         self.reset()
 
@@ -65,9 +66,11 @@ class DlsmcController:
         self._config = config
         self._limits = config.limits
         self._dt = config.dt
+        self._filter_gain = config.dt / (config.thetadot_filter + config.dt)  # 1: no filter
         self.outer.gains = config.outer
         self.inner.gains = config.inner
         self.outer.dt = self.inner.dt = config.dt
+        self.inner.omega_max = config.limits.omega_max
 
     def reset(self) -> None:
         """Start over: the next step is t = 0 of a new run."""
@@ -100,7 +103,8 @@ class DlsmcController:
         u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d)
         theta_d = math.atan2(u_y, u_x)
         if self._has_previous:
-            thetadot_d = wrap_angle(theta_d - self.theta_d) / self._dt
+            raw = wrap_angle(theta_d - self.theta_d) / self._dt
+            thetadot_d = self.thetadot_d + self._filter_gain * (raw - self.thetadot_d)
         else:
             thetadot_d = 0.0
             self._has_previous = True

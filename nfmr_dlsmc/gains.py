@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 from nfmr_dlsmc.validation import (ParameterError, check_exponent_pair, check_finite,
-                                   check_greater, check_positive)
+                                   check_greater, check_non_negative, check_positive)
 
 
 @dataclass(frozen=True)
@@ -75,6 +75,9 @@ class InnerLoopGains:
         Barrier-function coefficient lambda [rad/s] (eq. 13), > 0.
     eps : float
         Barrier half-width epsilon [rad] (eq. 13), in (0, pi).
+    anti_windup : bool
+        Hold the integral of eq. (12) while omega is saturated (not in the paper; off by
+        default). See :class:`~nfmr_dlsmc.inner_loop.AbfsmcInnerLoop`.
     """
 
     prefix: ClassVar[str] = "inner"
@@ -86,6 +89,7 @@ class InnerLoopGains:
     L1: float = 1.2
     lam: float = 1.0
     eps: float = 0.01
+    anti_windup: bool = False
 
     def __post_init__(self):
         n = self.prefix
@@ -97,6 +101,8 @@ class InnerLoopGains:
         eps = check_positive(f"{n}.eps", self.eps, "rad")
         if eps >= math.pi:
             raise ParameterError(f"{n}.eps", self.eps, "must be < pi", "rad")
+        if not isinstance(self.anti_windup, bool):
+            raise ParameterError(f"{n}.anti_windup", self.anti_windup, "must be true or false")
 
 
 @dataclass(frozen=True)
@@ -130,15 +136,20 @@ class DlsmcConfig:
     limits : InputLimits
     dt : float
         Control period [s] (paper: 1 ms).
+    thetadot_filter : float
+        Time constant [s] of a first-order low-pass on the backward-difference thetadot_d;
+        0 (default) uses the raw difference as the paper does (design.md point 5).
     """
 
     outer: OuterLoopGains = field(default_factory=OuterLoopGains)
     inner: InnerLoopGains = field(default_factory=InnerLoopGains)
     limits: InputLimits = field(default_factory=InputLimits)
     dt: float = 0.001
+    thetadot_filter: float = 0.0
 
     def __post_init__(self):
         check_positive("dt", self.dt, "s")
+        check_non_negative("thetadot_filter", self.thetadot_filter, "s")
 
 
 def gain_names(cls) -> list[str]:

@@ -1,5 +1,7 @@
 """Inner attitude loop: adaptive barrier-function SMC (ABFSMC)."""
 
+import math
+
 from nfmr_dlsmc.gains import InnerLoopGains
 from nfmr_dlsmc.sliding_functions import sig_pow
 
@@ -29,6 +31,12 @@ class AbfsmcInnerLoop:
     The integral is a left Riemann sum: eta_hat(0) = 0 and the term of step k enters at
     step k+1.
 
+    Anti-windup (``gains.anti_windup``, off by default as in the paper): the integral does
+    not grow during a step whose omega exceeds ``omega_max``. Theorem 1 assumes an
+    unsaturated omega; on a robot whose yaw rate lags the command (steering actuators) the
+    plain integral keeps growing while |s_theta| cannot reach eps/2, and the loop ends in a
+    bang-bang limit cycle at +-omega_max.
+
     Attributes (after a step)
     -------------------------
     eta_hat : float
@@ -39,10 +47,12 @@ class AbfsmcInnerLoop:
         True once |s| has reached eps/2 at least once.
     """
 
-    __slots__ = ("dt", "_gains", "_r1", "_eta_integral", "phase", "eta_hat", "t_bar_reached")
+    __slots__ = ("dt", "omega_max", "_gains", "_r1", "_eta_integral", "phase", "eta_hat",
+                 "t_bar_reached")
 
-    def __init__(self, gains: InnerLoopGains, dt: float):
+    def __init__(self, gains: InnerLoopGains, dt: float, omega_max: float = math.inf):
         self.dt = dt  # [s]
+        self.omega_max = omega_max  # [rad/s], used by the anti-windup option only
         self.gains = gains
         self.reset()
 
@@ -72,11 +82,11 @@ class AbfsmcInnerLoop:
         elif self.phase == INTEGRAL_PHASE and a <= 0.5 * g.eps:
             self.phase = BARRIER_PHASE  # t_bar reached
             self.t_bar_reached = True
-        if self.phase == BARRIER_PHASE:
-            eta = g.lam * a / (g.eps - a)
-        else:
-            eta = self._eta_integral
-            self._eta_integral += (g.L0 + g.L1 * a) * self.dt
+        integrating = self.phase == INTEGRAL_PHASE
+        eta = self._eta_integral if integrating else g.lam * a / (g.eps - a)
         self.eta_hat = eta
         sign = 1.0 if s_theta > 0.0 else (-1.0 if s_theta < 0.0 else 0.0)
-        return thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * sign
+        omega = thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * sign
+        if integrating and not (g.anti_windup and abs(omega) > self.omega_max):
+            self._eta_integral += (g.L0 + g.L1 * a) * self.dt
+        return omega

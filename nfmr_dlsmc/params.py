@@ -7,8 +7,9 @@ matches any node). Nested mappings are flattened to the dotted names that ROS us
 - ``outer.*`` (:class:`~nfmr_dlsmc.gains.OuterLoopGains`), ``inner.*``
   (:class:`~nfmr_dlsmc.gains.InnerLoopGains`), ``limits.*``
   (:class:`~nfmr_dlsmc.gains.InputLimits`);
-- ``control_rate`` [Hz] (the control period is its inverse);
-- ``trajectory.name`` and that trajectory's parameters (``trajectory.speed``, ...);
+- ``control_rate`` [Hz] (the control period is its inverse) and ``thetadot_filter`` [s];
+- ``trajectory.name`` and each trajectory's parameters under its name
+  (``trajectory.sine.speed``, ``trajectory.circle.radius``, ...); the named one is used;
 - ``steering.j1``, ``steering.j2`` (:class:`~nfmr_dlsmc.steering.SteerMode`) and
   ``geometry.*`` (:class:`~nfmr_dlsmc.steering.RobotGeometry`).
 
@@ -22,7 +23,7 @@ import yaml
 
 from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.steering import RobotGeometry, SteerMode
-from nfmr_dlsmc.trajectories import make_trajectory
+from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
 from nfmr_dlsmc.validation import ParameterError, check_positive
 
 
@@ -93,6 +94,40 @@ def load_params_file(path, node_name: str = "controller") -> dict:
     return merged
 
 
+def _check_trajectory_name(name: str, value) -> None:
+    """``trajectory.<type>.<field>`` must name a trajectory type and one of its fields."""
+    parts = name.split(".")
+    kind = parts[1] if len(parts) == 3 else None
+    if kind not in TRAJECTORY_TYPES:
+        raise ParameterError(name, value, "unknown parameter (expected trajectory.name or "
+                             f"trajectory.<{'|'.join(TRAJECTORY_TYPES)}>.<parameter>)")
+    allowed = [f.name for f in fields(TRAJECTORY_TYPES[kind])]
+    if parts[2] not in allowed:
+        raise ParameterError(name, value, f"unknown parameter (allowed for '{kind}': "
+                             f"{', '.join(allowed)})")
+
+
+def node_option_defaults() -> dict:
+    """Options of the controller node itself (validated there; ignored by the core)."""
+    return {"odom_timeout": 0.25, "tick_source": "odom", "twist_stamped": False,
+            "watchdog_period": 0.01}
+
+
+def controller_parameter_defaults() -> dict:
+    """Every controller parameter name with its default (the ROS declaration list)."""
+    defaults = {"control_rate": 1.0 / DlsmcConfig.dt,
+                "thetadot_filter": DlsmcConfig.thetadot_filter}
+    for prefix, cls in _SECTIONS.items():
+        defaults.update({f"{prefix}.{f.name}": f.default for f in fields(cls)})
+    defaults["trajectory.name"] = "sine"
+    for kind, cls in TRAJECTORY_TYPES.items():
+        defaults.update({f"trajectory.{kind}.{f.name}": f.default for f in fields(cls)})
+    defaults["steering.j1"] = SteerMode.j1
+    defaults["steering.j2"] = SteerMode.j2
+    defaults.update(node_option_defaults())
+    return defaults
+
+
 def controller_params(flat: dict) -> ControllerParams:
     """Build validated :class:`ControllerParams` from flat dotted names (defaults elsewhere).
 
@@ -104,7 +139,11 @@ def controller_params(flat: dict) -> ControllerParams:
     grouped = {name: {} for name in _SECTIONS}
     steering, trajectory = {}, {}
     control_rate = None
+    thetadot_filter = DlsmcConfig.thetadot_filter
+    node_options = node_option_defaults()
     for name, value in flat.items():
+        if name in node_options:
+            continue
         head, _, rest = name.partition(".")
         if head in _SECTIONS and rest:
             allowed = [f.name for f in fields(_SECTIONS[head])]
@@ -116,19 +155,38 @@ def controller_params(flat: dict) -> ControllerParams:
             steering[rest] = value
         elif head == "trajectory" and rest:
             trajectory[rest] = value
+            if rest != "name":
+                _check_trajectory_name(name, value)
         elif name == "control_rate":
             control_rate = check_positive("control_rate", value, "Hz")
+        elif name == "thetadot_filter":
+            thetadot_filter = value
         else:
             raise ParameterError(name, value, "unknown parameter")
     dt = DlsmcConfig.dt if control_rate is None else 1.0 / control_rate
     dlsmc = DlsmcConfig(outer=OuterLoopGains(**grouped["outer"]),
                         inner=InnerLoopGains(**grouped["inner"]),
-                        limits=InputLimits(**grouped["limits"]), dt=dt)
+                        limits=InputLimits(**grouped["limits"]), dt=dt,
+                        thetadot_filter=thetadot_filter)
     trajectory_name = trajectory.pop("name", "sine")
+    own = f"{trajectory_name}."
+    trajectory = {k[len(own):]: v for k, v in trajectory.items() if k.startswith(own)}
     if "j2" not in steering and isinstance(steering.get("j1"), (int, float)):
         steering["j2"] = 1.0 - steering["j1"]  # the only j2 SteerMode accepts
+    mode = SteerMode(**steering)
+    if mode.is_crab:
+        raise ParameterError("steering.j1", mode.j1, "must be > -1: the DLSMC steers by yawing, "
+                             "which crab mode (j1 = -1) cannot")
+    try:
+        reference = make_trajectory(trajectory_name, **trajectory)
+    except ParameterError as exc:
+        if exc.parameter == "trajectory.name":
+            raise
+        field_name = exc.parameter.rpartition(".")[2]  # name it as the file does
+        raise ParameterError(f"trajectory.{trajectory_name}.{field_name}", exc.value, exc.rule,
+                             exc.unit) from None
     return ControllerParams(dlsmc=dlsmc,
-                            trajectory=make_trajectory(trajectory_name, **trajectory),
+                            trajectory=reference,
                             trajectory_name=trajectory_name,
-                            steering=SteerMode(**steering),
+                            steering=mode,
                             geometry=RobotGeometry(**grouped["geometry"]))

@@ -16,6 +16,7 @@ class ParameterError(ValueError):
         self.parameter = parameter
         self.value = value
         self.rule = rule
+        self.unit = unit
         shown = f"{value!r} {unit}".rstrip()
         super().__init__(f"{parameter} = {shown}: {rule}")
 

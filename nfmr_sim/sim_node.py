@@ -48,7 +48,7 @@ class SimNode(Node):
                                  chassis.steer_limit)
         self.gate = CommandGate(self.settings.command_timeout, geometry,
                                 world_cfg.tracked_point_offset)
-        reliable = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, "/clock", reliable)
         self._odom_pub = self.create_publisher(Odometry, "odom", reliable)
         self._truth_pub = self.create_publisher(Odometry, "ground_truth", reliable)
@@ -86,6 +86,12 @@ class SimNode(Node):
     def _loop(self) -> None:
         s = self.settings
         dt = s.world.physics_dt
+        if s.start_after_subscribers:
+            self.get_logger().info(f"waiting for {s.start_after_subscribers} odom subscribers")
+            while self._running.is_set() and (
+                    self.count_subscribers("odom") < s.start_after_subscribers):
+                time.sleep(0.01)
+            time.sleep(0.2)  # let the matched readers settle before the first message
         out = self.world.observe()
         self._publish(out, aux=True)
         start = time.monotonic()
@@ -107,7 +113,12 @@ class SimNode(Node):
                 self.world.set_wheel_commands(*command)
             out = self.world.step()
             self.steps += 1
-            self._publish(out, aux=self.steps % s.aux_publish_every == 0)
+            try:
+                self._publish(out, aux=self.steps % s.aux_publish_every == 0)
+            except Exception:
+                if self.context.ok():
+                    raise
+                return  # shutting down (e.g. Ctrl-C): the context went first
 
     def _publish(self, out, aux: bool) -> None:
         stamp = time_message(out.time)

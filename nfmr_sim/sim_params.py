@@ -37,6 +37,9 @@ class SimSettings:
         Start pose of P (x [m], y [m], yaw [rad]).
     gui : bool
         Open pybullet's GUI window instead of the headless DIRECT client.
+    start_after_subscribers : int
+        Do not step until ``odom`` has this many subscribers (e.g. controller and
+        recorder), so that nobody misses the start of the run.
     """
 
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -46,6 +49,7 @@ class SimSettings:
     aux_publish_every: int = 10
     initial_pose: tuple = (0.0, 0.0, 0.0)
     gui: bool = False
+    start_after_subscribers: int = 0
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -60,6 +64,9 @@ class SimSettings:
                                  "must be [x, y, yaw] (3 numbers)")
         for i, value in enumerate(self.initial_pose):
             check_finite(f"initial_pose[{i}]", value)
+        count = self.start_after_subscribers
+        if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+            raise ParameterError("start_after_subscribers", count, "must be an integer >= 0")
         if not isinstance(self.gui, bool):
             raise ParameterError("gui", self.gui, "must be true or false")
 
@@ -73,7 +80,7 @@ def sim_parameter_defaults() -> dict:
     """Every sim parameter with its default value (the ROS declaration list)."""
     defaults = {"mode": "lockstep", "physics_dt": 0.001, "lockstep_timeout": 0.5,
                 "command_timeout": 0.1, "aux_publish_every": 10,
-                "initial_pose": [0.0, 0.0, 0.0], "gui": False,
+                "initial_pose": [0.0, 0.0, 0.0], "gui": False, "start_after_subscribers": 0,
                 "steering.j1": 1.0, "steering.j2": 0.0}
     chassis = _scalar_fields("chassis", ChassisConfig)
     chassis["chassis.yaw_inertia"] = 0.0  # 0: that of a uniform box
@@ -124,4 +131,5 @@ def sim_settings(flat: dict) -> SimSettings:
     return SimSettings(world=world, mode=p["mode"], lockstep_timeout=p["lockstep_timeout"],
                        command_timeout=p["command_timeout"],
                        aux_publish_every=p["aux_publish_every"],
-                       initial_pose=tuple(p["initial_pose"]), gui=p["gui"])
+                       initial_pose=tuple(p["initial_pose"]), gui=p["gui"],
+                       start_after_subscribers=p["start_after_subscribers"])

@@ -29,8 +29,8 @@ class MotorConfig:
     rated_torque: float = 20.0
     drive_gear_ratio: float = 10.0
     steer_gear_ratio: float = 50.0
-    steer_rate_limit: float = 6.0
-    steer_position_gain: float = 0.3
+    steer_rate_limit: float = 20.0
+    steer_position_gain: float = 1.0
     steer_velocity_gain: float = 1.0
     steer_lag: float = 0.0
 

@@ -81,9 +81,10 @@ def test_invalid_parameter_in_file_is_named(tmp_path):
 def test_params_file_changes_the_run(tmp_path):
     path = tmp_path / "slow.yaml"
     path.write_text("controller:\n  ros__parameters:\n    limits: {v_max: 0.6}\n"
-                    "    trajectory: {name: line}\n")
+                    "    trajectory: {name: line, line: {speed: 0.4}}\n")
     base = json.loads(run_eval("--json").stdout.splitlines()[-1])
     slow = json.loads(run_eval("--json", "--params", str(path)).stdout.splitlines()[-1])
     assert base["max_v"] > 0.6
     assert slow["max_v"] == pytest.approx(0.6)
     assert slow["scenario"]["trajectory"] == "line"
+    assert slow["t_conv"] is not None

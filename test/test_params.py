@@ -1,5 +1,7 @@
 """ROS-style parameter files -> validated controller configuration."""
 
+from dataclasses import replace
+
 import pytest
 
 from nfmr_dlsmc.params import ControllerParams, ParamsFileError, controller_params, load_params_file
@@ -10,19 +12,27 @@ from nfmr_dlsmc.validation import ParameterError
 PAPER_FILE = "config/paper_case1.yaml"
 
 
-def test_shipped_paper_file_equals_the_defaults(request):
-    path = request.config.rootpath / PAPER_FILE
-    assert controller_params(load_params_file(path)) == ControllerParams()
+def test_shipped_paper_file_is_the_paper_plus_two_robot_options(request):
+    flat = load_params_file(request.config.rootpath / PAPER_FILE)
+    params = controller_params(flat)
+    default = ControllerParams()
+    assert params.dlsmc.outer == default.dlsmc.outer and params.dlsmc.limits == default.dlsmc.limits
+    assert params.dlsmc.inner == replace(default.dlsmc.inner, anti_windup=True)
+    assert params.dlsmc.thetadot_filter == 0.02
+    assert (params.trajectory, params.steering, params.geometry) == (
+        default.trajectory, default.steering, default.geometry)
 
 
 def test_nested_and_wildcard_sections_are_flattened(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("/**:\n  ros__parameters:\n    control_rate: 500.0\n"
                     "controller:\n  ros__parameters:\n    outer: {C1: 0.9}\n"
-                    "    trajectory: {name: circle, radius: 2.0}\n    steering: {j1: 0.0}\n")
+                    "    trajectory: {name: circle, circle: {radius: 2.0}, sine: {speed: 1.0}}\n"
+                    "    steering: {j1: 0.0}\n")
     flat = load_params_file(path)
     assert flat == {"control_rate": 500.0, "outer.C1": 0.9, "trajectory.name": "circle",
-                    "trajectory.radius": 2.0, "steering.j1": 0.0}
+                    "trajectory.circle.radius": 2.0, "trajectory.sine.speed": 1.0,
+                    "steering.j1": 0.0}
     params = controller_params(flat)
     assert params.dlsmc.dt == pytest.approx(0.002)
     assert params.dlsmc.outer.C1 == 0.9 and params.dlsmc.outer.C2 == 0.6
@@ -38,12 +48,26 @@ def test_nested_and_wildcard_sections_are_flattened(tmp_path):
     ({"limits.v_max": "fast"}, "limits.v_max"),
     ({"control_rate": 0}, "control_rate"),
     ({"trajectory.name": "spiral"}, "trajectory.name"),
+    ({"trajectory.spiral.speed": 1.0}, "trajectory.spiral.speed"),
+    ({"trajectory.circle.amplitude": 1.0}, "trajectory.circle.amplitude"),
+    ({"trajectory.speed": 1.0}, "trajectory.speed"),
+    ({"trajectory.name": "line", "trajectory.line.speed": -1.0}, "trajectory.line.speed"),
+    ({"steering.j1": -1.0, "steering.j2": 2.0}, "steering.j1"),
     ({"steering.j1": 0.0, "steering.j2": 0.0}, "j2"),
 ])
 def test_invalid_parameters_are_named(flat, name):
     with pytest.raises(ParameterError) as info:
         controller_params(flat)
     assert info.value.parameter == name
+
+
+def test_defaults_table_builds_the_default_params():
+    from nfmr_dlsmc.params import controller_parameter_defaults
+
+    defaults = controller_parameter_defaults()
+    assert controller_params(defaults) == ControllerParams()
+    assert defaults["trajectory.lemniscate.amplitude"] == 4.0
+    assert defaults["inner.q1"] == 23 and defaults["control_rate"] == 1000.0
 
 
 def test_file_errors(tmp_path):

@@ -1,0 +1,283 @@
+"""``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes, recorded to MCAP.
+
+Starts ``sim`` and ``controller`` from one parameter file, records every topic of the run
+into a rosbag2 MCAP bag (in this process), shows progress, and at the end prints the
+paper's metrics next to the kinematic model's for the same scenario and writes plots.
+The last line printed is the bag directory.
+"""
+
+import argparse
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import rclpy
+from rclpy.experimental import EventsExecutor
+from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
+
+from nfmr_dlsmc.bag_writer import BagWriter
+from nfmr_dlsmc.dlsmc import DlsmcController
+from nfmr_dlsmc.kinematic_sim import simulate
+from nfmr_dlsmc.metrics import simulation_metrics
+from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
+from nfmr_dlsmc.recorder_node import RecorderNode
+from nfmr_dlsmc.run_analysis import plot_run, read_state_series, state_metrics
+from nfmr_dlsmc.validation import ParameterError
+from nfmr_sim.sim_params import sim_settings
+
+#: Topics of a run and their types (recorded from the first message).
+RUN_TOPICS = {
+    "/clock": "rosgraph_msgs/msg/Clock", "/odom": "nav_msgs/msg/Odometry",
+    "/ground_truth": "nav_msgs/msg/Odometry", "/joint_states": "sensor_msgs/msg/JointState",
+    "/disturbance_active": "std_msgs/msg/Bool", "/cmd_vel": "geometry_msgs/msg/Twist",
+    "/steer_position_controller/commands": "std_msgs/msg/Float64MultiArray",
+    "/wheel_velocity_controller/commands": "std_msgs/msg/Float64MultiArray",
+    "/controller_state": "std_msgs/msg/Float64MultiArray",
+    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray", "/rosout": "rcl_interfaces/msg/Log",
+}
+STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
+
+
+class RunError(RuntimeError):
+    """A run that could not complete (a child died); the message says which and why."""
+
+
+@dataclass
+class Child:
+    """A started node process and its log file."""
+
+    name: str
+    process: subprocess.Popen
+    log: Path
+
+    def tail(self, lines: int = 15) -> str:
+        """The last lines of its log."""
+        text = self.log.read_text(errors="replace").splitlines()
+        return "\n".join("    " + line for line in text[-lines:])
+
+
+def default_config() -> Path:
+    """``config/paper_case1.yaml`` here, else the installed copy."""
+    local = Path("config/paper_case1.yaml")
+    if local.exists():
+        return local
+    return Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "paper_case1.yaml"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="nfmr-run", description="Run the DLSMC against the pybullet robot as two ROS 2 "
+                                     "processes and record the run to an MCAP bag.")
+    parser.add_argument("config", nargs="?", type=Path, default=None,
+                        help="parameter file with 'sim' and 'controller' sections "
+                             "(default: config/paper_case1.yaml)")
+    parser.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep")
+    parser.add_argument("--duration", type=float, default=100.0, help="simulated time [s]")
+    parser.add_argument("--out", type=Path, default=Path("runs"), help="parent of run folders")
+    parser.add_argument("--no-record", action="store_true", help="do not write a bag")
+    parser.add_argument("--gui", action="store_true", help="open the pybullet GUI")
+    return parser
+
+
+def new_run_dir(out: Path, config: Path) -> Path:
+    """``<out>/<YYYYmmdd-HHMMSS>_<config stem>``, with a suffix rather than reuse."""
+    base = out / f"{time.strftime('%Y%m%d-%H%M%S')}_{config.stem}"
+    path, n = base, 1
+    while path.exists():
+        path, n = Path(f"{base}_{n}"), n + 1
+    path.mkdir(parents=True)
+    return path
+
+
+def _die_with_parent() -> None:
+    """In the child: get SIGTERM when the launcher dies, even by SIGKILL (Linux)."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except OSError:
+        pass
+
+
+def start_child(name: str, module: str, args: list, run_dir: Path) -> Child:
+    """Start ``python -m module args`` in its own session (a terminal's Ctrl-C reaches only
+    the launcher, which stops the children in order), logging to ``<run_dir>/<name>.log``."""
+    log = run_dir / f"{name}.log"
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    with log.open("w") as fh:
+        process = subprocess.Popen([sys.executable, "-m", module, *args], stdout=fh,
+                                   stderr=subprocess.STDOUT, env=env, start_new_session=True,
+                                   preexec_fn=_die_with_parent)
+    return Child(name, process, log)
+
+
+def stop_children(children: list) -> None:
+    """SIGINT every live child, then kill what is still alive after STOP_TIMEOUT."""
+    for child in children:
+        if child.process.poll() is None:
+            child.process.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + STOP_TIMEOUT
+    for child in children:
+        try:
+            child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            child.process.kill()
+            child.process.wait()
+
+
+def _raise_on_sigterm(signum, frame):
+    raise KeyboardInterrupt
+
+
+def run(args) -> int:
+    config = args.config or default_config()
+    try:
+        flat_controller = load_params_file(config, "controller")
+        params = controller_params(flat_controller)
+        settings = sim_settings(load_params_file(config, "sim"))
+    except (ParamsFileError, ParameterError) as exc:
+        print(f"nfmr-run: error: {exc}", file=sys.stderr)
+        return 2
+    if not args.duration > 0.0:
+        print(f"nfmr-run: error: --duration must be > 0, got {args.duration}", file=sys.stderr)
+        return 2
+    run_dir = new_run_dir(args.out, config)
+    bag_dir = run_dir / "bag"
+    print(f"run folder {run_dir}", file=sys.stderr)
+    signal.signal(signal.SIGTERM, _raise_on_sigterm)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    writer = None if args.no_record else BagWriter(bag_dir)
+    recorder = None
+    executor = EventsExecutor()  # several times less CPU per message than the default
+    if writer is not None:
+        recorder = RecorderNode(writer, RUN_TOPICS, parameter_overrides=[
+            Parameter("use_sim_time", value=True)])
+        executor.add_node(recorder)
+    children = []
+    status = 0
+    interrupted = False
+    clock = ClockWatch(recorder, executor)
+    try:
+        sim_args = ["--ros-args", "--params-file", str(config), "-p", f"mode:={args.mode}",
+                    "-p", f"gui:={'true' if args.gui else 'false'}",
+                    "-p", f"start_after_subscribers:={1 if args.no_record else 2}"]
+        ctrl_args = ["--ros-args", "--params-file", str(config)]
+        if args.mode == "realtime":
+            ctrl_args += ["-p", "tick_source:=clock"]
+        children = [start_child("sim", "nfmr_sim.sim_node", sim_args, run_dir),
+                    start_child("controller", "nfmr_dlsmc.controller_node", ctrl_args, run_dir)]
+        wait_for_run(children, clock, args.duration)
+    except KeyboardInterrupt:
+        interrupted = True
+        status = 130
+        print("\ninterrupted: stopping the run", file=sys.stderr)
+    except RunError as exc:
+        status = 1
+        print(f"\nnfmr-run: {exc}", file=sys.stderr)
+    finally:
+        stop_children(children[:1])  # the sim first: no new steps
+        clock.spin(1.0)  # deliver what the controller published for the last steps
+        stop_children(children[1:])
+        if recorder is not None:
+            clock.drain()
+            recorder.close()
+            executor.remove_node(recorder)
+            recorder.destroy_node()
+        rclpy.try_shutdown()
+    if writer is not None and status == 0:
+        report(bag_dir, run_dir, params, settings, args.duration, writer.counts)
+    if writer is not None:
+        print(bag_dir)
+    return status if not interrupted else 130
+
+
+class ClockWatch:
+    """Spins the recorder and tracks simulated time from /clock."""
+
+    def __init__(self, recorder, executor):
+        self.recorder = recorder
+        self.executor = executor
+        self.started = time.monotonic()
+
+    def spin(self, seconds: float) -> None:
+        if self.recorder is None:
+            time.sleep(seconds)
+            return
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
+
+    @property
+    def sim_time(self) -> float:
+        return 0.0 if self.recorder is None else self.recorder.last_clock_ns * 1e-9
+
+    def drain(self, quiet: float = 0.5) -> None:
+        """Spin until no message arrived for ``quiet`` seconds."""
+        last = -1
+        while last != self.recorder.received + self.recorder.pending():
+            last = self.recorder.received + self.recorder.pending()
+            self.spin(quiet)
+
+
+def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
+    """Spin until the sim reaches ``duration``, showing progress; raise if a child dies."""
+    last_print = 0.0
+    while True:
+        clock.spin(0.05)
+        for child in children:
+            code = child.process.poll()
+            if code is not None:
+                raise RunError(f"{child.name} exited with code {code}; last lines of "
+                               f"{child.log}:\n{child.tail()}")
+        now = time.monotonic()
+        sim_t = clock.sim_time
+        if now - last_print > 0.5 or sim_t >= duration:
+            wall = now - clock.started
+            print(f"\rsim {sim_t:7.2f} / {duration:g} s   real-time factor "
+                  f"{sim_t / wall if wall > 0 else 0.0:5.2f}", end="", file=sys.stderr,
+                  flush=True)
+            last_print = now
+        if clock.recorder is None and now - clock.started >= duration:
+            break
+        if sim_t >= duration:
+            break
+    print(file=sys.stderr)
+
+
+def report(bag_dir, run_dir, params, settings, duration, counts) -> None:
+    """Print the metrics table (pybullet vs kinematic model) and write plots."""
+    series = read_state_series(bag_dir)
+    ours = state_metrics(series, params.dlsmc.dt)
+    kin = simulate(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
+                   duration, params.dlsmc.dt)
+    kin_metrics = simulation_metrics(kin)
+    kin_series = {"t": kin.t, "x": kin.state[:, 0], "y": kin.state[:, 1],
+                  "x_d": kin.reference[:, 0], "y_d": kin.reference[:, 1],
+                  "theta_e": kin.telemetry["theta_e"], "v": kin.v, "omega": kin.omega}
+    plot_run(series, run_dir, reference=kin_series)
+    rows = [("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise"),
+            ("STD of distance [m]", "std"), ("convergence time (1 mm) [s]", "t_conv"),
+            ("final distance [m]", "final_distance"),
+            ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
+            ("max v [m/s]", "max_v"), ("max |omega| [rad/s]", "max_abs_omega")]
+    a, b = ours.as_dict(), kin_metrics.as_dict()
+    fmt = lambda v: "never" if v is None else f"{v:.4f}"  # noqa: E731
+    print(f"{'metric':<36} {'pybullet':>10} {'kinematic':>10}")
+    for label, key in rows:
+        print(f"{label:<36} {fmt(a[key]):>10} {fmt(b[key]):>10}")
+    stopped = int(series["stopped"].sum())
+    print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
+          f"{sum(counts.values())} messages recorded; plots in {run_dir}")
+
+
+def main(argv=None) -> int:
+    """Entry point of ``nfmr-run``."""
+    return run(build_parser().parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,143 @@
+"""One tracking run as the controller node drives it, without ROS.
+
+:class:`TrackingSession` owns the controller, the reference and the steering mapping, and
+decides each tick what to command: before the first valid odometry, nothing; after it, the
+DLSMC output mapped to the four wheels; with stale or non-finite odometry, zero speed with
+the steering held, until fresh odometry returns. Trajectory time starts at the first valid
+odometry and runs on the control clock; it keeps running while the robot is stopped.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nfmr_dlsmc.dlsmc import DlsmcController
+from nfmr_dlsmc.params import ControllerParams
+from nfmr_dlsmc.steering import wheel_commands
+from nfmr_dlsmc.trajectories import reference_heading
+
+#: Field names of :attr:`TickOutput.state`, in order (the ``controller_state`` layout).
+STATE_FIELDS = ("t", "x", "y", "theta", "x_d", "y_d", "theta_r", "x_e", "y_e", "theta_d",
+                "theta_e", "s_x", "s_y", "eta_hat", "inner_phase", "v", "omega", "v_raw",
+                "omega_raw", "v_saturated", "omega_saturated", "steer_limited", "stopped")
+
+
+@dataclass(frozen=True)
+class TickOutput:
+    """What one control tick commands.
+
+    Attributes
+    ----------
+    v, omega : float
+        Unicycle command at P [m/s], [rad/s].
+    steer : ndarray (4,)
+        Steer angles [rad], FL FR RL RR.
+    wheel_speed : ndarray (4,)
+        Wheel speeds [rad/s], FL FR RL RR.
+    state : tuple of float
+        The values named by :data:`STATE_FIELDS`.
+    stopped : bool
+        True when safety stopped the robot.
+    report : str or None
+        A message when the safety state changed (log it once).
+    """
+
+    v: float
+    omega: float
+    steer: np.ndarray
+    wheel_speed: np.ndarray
+    state: tuple
+    stopped: bool
+    report: str | None
+
+
+class TrackingSession:
+    """Controller, reference and steering for one run.
+
+    Parameters
+    ----------
+    params : ControllerParams
+    odom_timeout : float
+        Odometry older than this [s, wall clock] stops the robot.
+    """
+
+    def __init__(self, params: ControllerParams, odom_timeout: float):
+        self.params = params
+        self.odom_timeout = odom_timeout
+        self.controller = DlsmcController(params.dlsmc)
+        self._pose = None  # latest valid (x, y, theta)
+        self._pose_wall = None  # wall time [s] it arrived
+        self._bad_odometry = None  # reason while the latest odometry is invalid
+        self._t0 = None  # control time [s] of the first valid odometry
+        self._t = 0.0  # trajectory time [s] of the last tick that tracked
+        self._steer = np.zeros(4)
+        self._fault_reported = None
+
+    @property
+    def started(self) -> bool:
+        """Whether valid odometry has arrived (trajectory time is running)."""
+        return self._t0 is not None
+
+    def set_params(self, params: ControllerParams) -> None:
+        """New gains or limits; they take effect at the next tick."""
+        self.params = params
+        self.controller.config = params.dlsmc
+
+    def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
+                    control_time: float) -> None:
+        """Odometry of P arrived (pose [m, m, rad]) at ``wall_time`` / ``control_time`` [s]."""
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            self._bad_odometry = f"odometry is not finite: ({x}, {y}, {theta})"
+            return
+        self._bad_odometry = None
+        self._pose = (x, y, theta)
+        self._pose_wall = wall_time
+        if self._t0 is None:
+            self._t0 = control_time
+
+    def odometry_age(self, wall_time: float) -> float:
+        """Wall time [s] since the latest valid odometry (inf before any)."""
+        return math.inf if self._pose_wall is None else wall_time - self._pose_wall
+
+    def _fault(self, wall_time: float) -> str | None:
+        if self._bad_odometry is not None:
+            return self._bad_odometry
+        age = self.odometry_age(wall_time)
+        if age > self.odom_timeout:
+            return f"odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)"
+        return None
+
+    def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
+        """The command for this tick, or None before the first valid odometry."""
+        if self._t0 is None:
+            return None
+        fault = self._fault(wall_time)
+        kind = None if fault is None else fault.split(":")[0].split(" is ")[0]
+        report = None
+        if kind != self._fault_reported:  # log each fault once, not each tick it lasts
+            report = (f"stopping the robot: {fault}" if fault
+                      else "fresh odometry: tracking resumed")
+            self._fault_reported = kind
+        if not fault:
+            self._t = control_time - self._t0
+        t = self._t  # a stopped robot reports where tracking stopped
+        x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
+        x, y, theta = self._pose
+        ctrl = self.controller
+        if fault:
+            v = omega = 0.0
+            steer, wheels = self._steer.copy(), np.zeros(4)
+            limited = False
+        else:
+            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+            cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
+                                 hold_steer=self._steer)
+            steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
+            self._steer = steer
+        state = (t, x, y, theta, x_d, y_d, float(reference_heading(xdot_d, ydot_d)),
+                 ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
+                 ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
+                 ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
+                 float(limited), float(bool(fault)))
+        return TickOutput(v, omega, steer, wheels, state, bool(fault), report)
