@@ -8,14 +8,26 @@ STAMP  := $(VENV)/.nfmr-installed
 
 setup: $(STAMP)
 
+PKG_LIB   := $(VENV)/lib/nfmr_dlsmc
+PKG_SHARE := $(VENV)/share/nfmr_dlsmc
+INDEX     := $(VENV)/share/ament_index/resource_index/packages
+
 $(STAMP): setup.py setup.cfg package.xml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	# The ament layout that `ros2 run` and ament_index expect, as colcon would install it:
+	# executables in lib/<pkg>, the package marker in the index, package.xml and config.
+	mkdir -p $(PKG_LIB) $(PKG_SHARE) $(INDEX)
+	ln -sf ../../bin/controller $(PKG_LIB)/controller
+	ln -sf ../../bin/sim $(PKG_LIB)/sim
+	cp resource/nfmr_dlsmc $(INDEX)/nfmr_dlsmc
+	ln -sfn $(CURDIR)/package.xml $(PKG_SHARE)/package.xml
+	ln -sfn $(CURDIR)/config $(PKG_SHARE)/config
 	touch $(STAMP)
 
 run: setup
-	$(BIN)/nfmr-eval --controller dlsmc --trajectory sine --x0 1,4,0 --duration 100
+	$(BIN)/nfmr-run
 
 test: setup
 	$(BIN)/python -m pytest -q

@@ -1,0 +1,200 @@
+"""The controller node in-process with a real executor, over real DDS."""
+
+import math
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Log
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Float64MultiArray
+
+from nfmr_dlsmc.controller_node import ControllerNode
+from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.validation import ParameterError
+from ros_helpers import Spinner, new_context, wait_for
+
+QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+class Peer(Node):
+    """Plays the robot: publishes odometry, records the controller's outputs with times."""
+
+    def __init__(self, context):
+        super().__init__("peer", context=context)
+        self.twists, self.steer, self.wheels, self.states, self.logs = [], [], [], [], []
+        self.odom = self.create_publisher(Odometry, "odom", QOS)
+        stamp = lambda store: (lambda m: store.append((time.monotonic(), m)))  # noqa: E731
+        self.create_subscription(Twist, "cmd_vel", stamp(self.twists), QOS)
+        self.create_subscription(Float64MultiArray, "steer_position_controller/commands",
+                                 stamp(self.steer), QOS)
+        self.create_subscription(Float64MultiArray, "wheel_velocity_controller/commands",
+                                 stamp(self.wheels), QOS)
+        self.create_subscription(Float64MultiArray, "controller_state", stamp(self.states), QOS)
+        self.create_subscription(Log, "/rosout", lambda m: m.name == "controller"
+                                 and self.logs.append(m.msg), QoSProfile(depth=1000))
+
+    def send_odom(self, x, y, yaw, t):
+        msg = Odometry()
+        msg.header.stamp.sec = int(t)
+        msg.header.stamp.nanosec = int(round((t - int(t)) * 1e9))
+        msg.header.frame_id = "odom"
+        msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
+        msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+        self.odom.publish(msg)
+
+
+@pytest.fixture
+def setup():
+    context = new_context()
+    made = {}
+
+    def make(**overrides):
+        node = ControllerNode(context=context, parameter_overrides=[
+            Parameter(k, value=v) for k, v in overrides.items()])
+        peer = Peer(context)
+        spinner = Spinner(context, node, peer)
+        wait_for(lambda: peer.count_subscribers("odom") > 0 and
+                 node.count_subscribers("controller_state") > 0, what="discovery")
+        time.sleep(0.3)
+        made.update(node=node, peer=peer, spinner=spinner)
+        node.start()
+        return node, peer
+
+    yield make
+    if made:
+        made["node"].stop()
+        made["spinner"].close()
+    rclpy.try_shutdown(context=context)
+
+
+def drive(peer, steps, start_t=0.0, pose=(1.0, 4.0, 0.0)):
+    """Lockstep-like: one odometry per reply (kept still at ``pose``)."""
+    for k in range(steps):
+        n = len(peer.states)
+        peer.send_odom(*pose, start_t + k * 0.001)
+        wait_for(lambda: len(peer.states) > n, what="a controller reply")
+
+
+def test_one_command_per_odometry_matching_the_core(setup):
+    node, peer = setup()
+    drive(peer, 50)
+    wait_for(lambda: len(peer.wheels) == 50 and len(peer.twists) == 50)
+    assert len(peer.states) == 50
+    # The first tick is the hand-computed DLSMC first step from (1, 4, 0) on the sine.
+    twist = peer.twists[0][1]
+    assert twist.linear.x == pytest.approx(math.hypot(-0.1, -0.35))
+    labels = peer.states[0][1].layout.dim[0].label.split(",")
+    state = dict(zip(labels, peer.states[-1][1].data))
+    assert state["t"] == pytest.approx(0.049)
+    # Per-wheel outputs are the core mapping of the published (v, omega).
+    for (_, tw), (_, st), (_, wh) in zip(peer.twists, peer.steer, peer.wheels):
+        expected = wheel_commands(tw.linear.x, tw.angular.z, RobotGeometry(), SteerMode(1.0, 0.0))
+        np.testing.assert_allclose(st.data, expected.steer, atol=1e-12)
+        np.testing.assert_allclose(wh.data, expected.wheel_speed, atol=1e-9)
+
+
+def test_nothing_moves_before_the_first_odometry(setup):
+    node, peer = setup()
+    time.sleep(0.3)
+    assert peer.twists == [] and peer.wheels == []
+
+
+def test_stale_odometry_stops_within_50_ms_and_recovery_resumes(setup):
+    node, peer = setup(odom_timeout=0.1)
+    drive(peer, 20)
+    last_odom = time.monotonic()
+    wait_for(lambda: any(tw.linear.x == 0.0 for _, tw in peer.twists), timeout=2.0,
+             what="a stop")
+    stop_time = next(t for t, tw in peer.twists if tw.linear.x == 0.0)
+    assert stop_time - (last_odom + 0.1) < 0.05
+    stop_index = next(i for i, (_, w) in enumerate(peer.wheels) if not any(w.data))
+    np.testing.assert_allclose(peer.steer[stop_index][1].data, peer.steer[stop_index - 1][1].data)
+    wait_for(lambda: any("odometry is" in m and "old" in m for m in peer.logs), what="the log")
+    n = len(peer.twists)
+    drive(peer, 5, start_t=1.0)
+    wait_for(lambda: len(peer.twists) >= n + 5)
+    assert peer.twists[-1][1].linear.x > 0.0
+    wait_for(lambda: any("resumed" in m for m in peer.logs), what="resume log")
+    assert sum("old" in m for m in peer.logs) == 1
+
+
+def test_nan_odometry_stops_at_once(setup):
+    node, peer = setup()
+    drive(peer, 10)
+    n = len(peer.twists)
+    sent = time.monotonic()
+    peer.send_odom(math.nan, 4.0, 0.0, 0.011)
+    wait_for(lambda: len(peer.twists) > n, what="a reply to NaN odometry")
+    arrival, twist = peer.twists[n]
+    assert twist.linear.x == 0.0 and twist.angular.z == 0.0
+    assert arrival - sent < 0.05
+    wait_for(lambda: any("not finite" in m for m in peer.logs), what="the log")
+
+
+def test_live_gain_change_takes_effect_at_the_next_tick(setup):
+    node, peer = setup()
+    drive(peer, 5)
+    result = node.set_parameters([Parameter("limits.v_min", value=0.5)])[0]
+    assert result.successful
+    drive(peer, 1, start_t=0.005)
+    assert peer.twists[-1][1].linear.x == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("name, value, reason", [
+    ("inner.p1", 32, "positive odd integer"),
+    ("outer.q2", 35, "1 < outer.p2/outer.q2 < 2"),
+    ("limits.v_max", 0.1, "must be > limits.v_min"),
+    ("inner.eps", -0.01, "must be > 0"),
+    ("odom_timeout", 0.0, "must be > 0"),
+])
+def test_invalid_live_change_is_rejected_and_changes_nothing(setup, name, value, reason):
+    node, peer = setup()
+    before = node.session.params
+    result = node.set_parameters([Parameter(name, value=value)])[0]
+    assert not result.successful
+    assert name in result.reason and reason in result.reason
+    assert node.session.params is before
+    assert node.get_parameter(name).value != value
+
+
+def test_structure_parameters_are_read_only(setup):
+    node, peer = setup()
+    result = node.set_parameters([Parameter("trajectory.name", value="circle")])[0]
+    assert not result.successful
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("inner.p1", 32, "inner.p1 = 32: must be a positive odd integer"),
+    ("outer.p2", 17, "outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2"),
+    ("limits.omega_max", -1.0, "limits.omega_max = -1.0 rad/s: must be > 0"),
+    ("inner.eps", 1, "inner.eps = 1: must be of type double"),
+    ("outer.gain", 1.0, "outer.gain = 1.0: unknown parameter"),
+    ("tick_source", "timer", "tick_source = 'timer': must be one of odom, clock"),
+    ("trajectory.name", "spiral", "trajectory.name = 'spiral'"),
+])
+def test_invalid_start_parameters_stop_the_node(name, value, message):
+    context = new_context()
+    try:
+        with pytest.raises(ParameterError) as info:
+            ControllerNode(context=context, parameter_overrides=[Parameter(name, value=value)])
+        assert message in str(info.value)
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+def test_clock_mode_ticks_at_the_control_rate(setup):
+    node, peer = setup(tick_source="clock")
+    peer.send_odom(1.0, 4.0, 0.0, 0.0)
+    wait_for(lambda: len(peer.states) > 0, what="first tick")
+    time.sleep(0.5)
+    # Odometry is older than the timeout now, but the loop kept ticking (stopped).
+    n0 = len(peer.states)
+    time.sleep(0.5)
+    rate = (len(peer.states) - n0) / 0.5
+    assert 800.0 < rate < 1100.0

@@ -1,0 +1,29 @@
+"""The package as ROS tooling finds it in the install prefix (the virtual environment)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from ament_index_python.packages import get_package_prefix, get_package_share_directory
+
+PREFIX = Path(sys.prefix)
+
+
+def test_ament_index_finds_the_package(monkeypatch):
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(PREFIX))
+    assert Path(get_package_prefix("nfmr_dlsmc")) == PREFIX
+    share = Path(get_package_share_directory("nfmr_dlsmc"))
+    assert (share / "package.xml").is_file()
+    assert (share / "config" / "paper_case1.yaml").is_file()
+
+
+def test_executables_sit_in_lib_of_the_package_and_run():
+    for name, needle in (("controller", "controller: invalid parameter: inner.p1 = 32"),
+                         ("sim", "sim: invalid parameter: mode = 'x'")):
+        exe = PREFIX / "lib" / "nfmr_dlsmc" / name
+        assert exe.exists() and os.access(exe, os.X_OK)
+        arg = "inner.p1:=32" if name == "controller" else "mode:=x"
+        proc = subprocess.run([str(exe), "--ros-args", "-p", arg], capture_output=True,
+                              text=True, timeout=60)
+        assert proc.returncode == 2 and needle in proc.stderr

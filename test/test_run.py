@@ -1,0 +1,138 @@
+"""nfmr-run end to end: two node processes, real DDS, a recorded bag read three ways."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from rclpy.serialization import deserialize_message
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+
+from decoding import plain
+from nfmr_dlsmc.recorder_node import message_class
+
+RUN = str(Path(sys.executable).parent / "nfmr-run")
+
+
+def start_run(tmp_path, *args):
+    return subprocess.Popen([RUN, "--out", str(tmp_path), *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=Path(__file__).parents[1])
+
+
+def children_of(pid):
+    out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+def cmdline(pid):
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs")
+    proc = start_run(out, "--duration", "3")
+    stdout, stderr = proc.communicate(timeout=300)
+    return proc.returncode, stdout, stderr
+
+
+def test_run_prints_metrics_and_ends_with_the_bag_path(short_run):
+    code, stdout, stderr = short_run
+    assert code == 0, stderr
+    lines = stdout.strip().splitlines()
+    bag = Path(lines[-1])
+    assert bag.name == "bag" and (bag / "metadata.yaml").is_file()
+    assert any(line.startswith("IAE of distance") for line in lines)
+    assert "pybullet" in stdout and "kinematic" in stdout
+    for plot in ("trajectory.png", "errors.png", "inputs.png"):
+        assert (bag.parent / plot).stat().st_size > 10_000
+    assert "real-time factor" in stderr
+
+
+def test_lockstep_records_every_step_and_every_reply(short_run):
+    bag = Path(short_run[1].strip().splitlines()[-1])
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    counts = {t["topic_metadata"]["name"]: t["message_count"]
+              for t in info["topics_with_message_count"]}
+    assert counts["/clock"] == counts["/odom"] >= 3000
+    # One command per odometry message; extra replies come only from the safety stop after
+    # the sim was shut down, and those are marked as stopped.
+    with (bag / "bag_0.mcap").open("rb") as stream:
+        states = [deserialize_message(m.data, message_class("std_msgs/msg/Float64MultiArray"))
+                  for _, _, m in make_reader(stream).iter_messages(topics=["/controller_state"])]
+    labels = states[0].layout.dim[0].label.split(",")
+    stopped = sum(s.data[labels.index("stopped")] for s in states)
+    assert len(states) - stopped == counts["/odom"]
+    for topic in ("/cmd_vel", "/steer_position_controller/commands",
+                  "/wheel_velocity_controller/commands"):
+        assert counts[topic] == len(states)
+
+
+def test_three_readers_agree_on_every_message(short_run):
+    bag = Path(short_run[1].strip().splitlines()[-1])
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with (bag / "bag_0.mcap").open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        via_mcap_ros2 = [(channel.topic, message.log_time, plain(decoded))
+                         for _, channel, message, decoded in reader.iter_decoded_messages()]
+    with Reader(bag) as reader:
+        via_rosbags, via_rclpy = [], []
+        for conn, t, raw in reader.messages():
+            via_rosbags.append((conn.topic, t, plain(store.deserialize_cdr(raw, conn.msgtype))))
+            via_rclpy.append((conn.topic, t,
+                              plain(deserialize_message(raw, message_class(conn.msgtype)))))
+    assert len(via_rclpy) > 15_000
+    assert via_mcap_ros2 == via_rosbags == via_rclpy
+
+
+def test_a_crashed_child_stops_the_run_with_its_code_and_log(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60")
+    try:
+        deadline = time.monotonic() + 60
+        controller = None
+        while controller is None and time.monotonic() < deadline:
+            time.sleep(0.2)
+            controller = next((p for p in children_of(proc.pid)
+                               if "controller_node" in cmdline(p)), None)
+        assert controller is not None
+        time.sleep(3.0)
+        os.kill(controller, signal.SIGKILL)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 1
+    assert "controller exited with code -9" in stderr
+    assert "controller.log" in stderr
+    bag = Path(stdout.strip().splitlines()[-1])
+    with Reader(bag) as reader:  # finished and readable
+        assert reader.message_count > 0
+    assert not [p for p in children_of(proc.pid)]
+
+
+def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60")
+    deadline = time.monotonic() + 60
+    kids = []
+    while len(kids) < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
+        kids = children_of(proc.pid)
+    time.sleep(3.0)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130
+    for pid in kids:
+        assert not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2]
+    bag = Path(stdout.strip().splitlines()[-1])
+    with Reader(bag) as reader:
+        assert reader.message_count > 0
