@@ -29,7 +29,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from nfmr_dlsmc.loop_stats import LoopStats
-from nfmr_dlsmc.params import controller_parameter_defaults, controller_params
+from nfmr_dlsmc.params import (controller_parameter_defaults, controller_params,
+                               parameter_descriptions)
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.tracking_session import STATE_FIELDS, TrackingSession
 from nfmr_dlsmc.validation import ParameterError, check_positive
@@ -51,7 +52,7 @@ class ControllerNode(Node):
         super().__init__("controller", **kwargs)
         defaults = controller_parameter_defaults()
         read_only = [n for n in defaults if n.startswith(READ_ONLY_PREFIXES)]
-        values = declare_parameters(self, defaults, read_only)
+        values = declare_parameters(self, defaults, read_only, parameter_descriptions())
         self._values = values
         params = controller_params(values)
         odom_timeout = check_positive("odom_timeout", values["odom_timeout"], "s")

@@ -113,6 +113,51 @@ def node_option_defaults() -> dict:
             "watchdog_period": 0.01}
 
 
+def parameter_descriptions() -> dict:
+    """One line per controller parameter: meaning, unit and allowed values (for ROS
+    parameter descriptors, shown by ``ros2 param describe``)."""
+    odd = "positive odd integer"
+    text = {
+        "control_rate": "control rate [Hz] (> 0); the period is 1/rate",
+        "thetadot_filter": "time constant of the low-pass on thetadot_d [s] (>= 0; 0: none)",
+        "outer.C1": "BTINTSMC rate on x, eq. 34 [m/s] (> 0)",
+        "outer.C2": "BTINTSMC rate on y, eq. 35 [m/s] (> 0)",
+        "outer.k2": "BTINTSMC reaching gain, eqs 34-35 (> 0)",
+        "outer.h": "slope of erf in eqs 34-35 [1/m] (> 0)",
+        "outer.xi": "full-speed / stable-tracking boundary, eq. 33 [m] (> 0)",
+        "outer.p2": f"exponent denominator of alpha, eq. 33 ({odd}, 1 < p2/q2 < 2)",
+        "outer.q2": f"exponent numerator of alpha, eq. 33 ({odd})",
+        "outer.p3": f"exponent denominator of the reaching term ({odd}, 1 < p3/q3 < 2)",
+        "outer.q3": f"exponent numerator of the reaching term ({odd})",
+        "inner.k1": "ABFSMC reaching gain, eq. 11 (> 0)",
+        "inner.p1": f"exponent denominator, eq. 11 ({odd}, 1 < p1/q1 < 2)",
+        "inner.q1": f"exponent numerator, eq. 11 ({odd})",
+        "inner.L0": "constant adaptation rate, eq. 12 [rad/s^2] (> 0)",
+        "inner.L1": "error adaptation rate, eq. 12 [1/s^2] (> 1)",
+        "inner.lam": "barrier coefficient lambda, eq. 13 [rad/s] (> 0)",
+        "inner.eps": "barrier half-width epsilon, eq. 13 [rad] (0 < eps < pi)",
+        "inner.anti_windup": "hold the eq. 12 integral while omega saturates (not in the paper)",
+        "limits.v_min": "least linear speed [m/s] (> 0)",
+        "limits.v_max": "largest linear speed [m/s] (> v_min)",
+        "limits.omega_max": "largest |yaw rate| [rad/s] (> 0)",
+        "geometry.wheelbase": "front-rear axle distance [m] (> 0)",
+        "geometry.track": "left-right wheel distance [m] (> 0)",
+        "geometry.wheel_radius": "[m] (> 0)",
+        "geometry.steer_limit": "largest |steer angle| [rad] (0 < limit <= pi/2)",
+        "steering.j1": "-tan(delta_r)/tan(delta_f): 1 double Ackermann, 0 front only (> -1)",
+        "steering.j2": "must equal 1 - j1",
+        "trajectory.name": f"reference: one of {', '.join(TRAJECTORY_TYPES)}",
+        "odom_timeout": "odometry older than this stops the robot [s, wall clock] (> 0)",
+        "tick_source": "odom: one step per odometry message; clock: own loop at control_rate",
+        "twist_stamped": "publish cmd_vel as TwistStamped",
+        "watchdog_period": "how often stale odometry is checked [s] (> 0)",
+    }
+    for kind, cls in TRAJECTORY_TYPES.items():
+        for f in fields(cls):
+            text[f"trajectory.{kind}.{f.name}"] = f"{f.name} of the '{kind}' trajectory"
+    return text
+
+
 def controller_parameter_defaults() -> dict:
     """Every controller parameter name with its default (the ROS declaration list)."""
     defaults = {"control_rate": 1.0 / DlsmcConfig.dt,

@@ -22,8 +22,10 @@ def _declared_type(default):
     raise TypeError(f"no ROS parameter type for {default!r}")
 
 
-def declare_parameters(node: Node, defaults: dict, read_only=()) -> dict:
+def declare_parameters(node: Node, defaults: dict, read_only=(), descriptions=None) -> dict:
     """Declare every parameter of ``defaults`` (name -> default) and return the values.
+
+    ``descriptions`` (name -> text) fill the descriptors that ``ros2 param describe`` shows.
 
     Parameters given in a ``--params-file`` override the defaults; a value of the wrong
     type, or a name the node does not know, raises :class:`ParameterError` naming it.
@@ -36,6 +38,7 @@ def declare_parameters(node: Node, defaults: dict, read_only=()) -> dict:
     for name, default in defaults.items():
         ptype = _declared_type(default)
         descriptor = ParameterDescriptor(name=name, type=ptype.value,
+                                         description=(descriptions or {}).get(name, ""),
                                          read_only=name in read_only)
         # An empty list carries no element type: declare those by type alone.
         initial = ptype if isinstance(default, (list, tuple)) and not default else default

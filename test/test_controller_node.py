@@ -6,12 +6,12 @@ import time
 import numpy as np
 import pytest
 import rclpy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray
 
 from nfmr_dlsmc.controller_node import ControllerNode
@@ -20,24 +20,27 @@ from nfmr_dlsmc.validation import ParameterError
 from ros_helpers import Spinner, new_context, wait_for
 
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+# /rosout keeps its latest messages for late joiners (transient local): so do we.
+ROSOUT_QOS = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class Peer(Node):
     """Plays the robot: publishes odometry, records the controller's outputs with times."""
 
-    def __init__(self, context):
+    def __init__(self, context, twist_type=Twist):
         super().__init__("peer", context=context)
         self.twists, self.steer, self.wheels, self.states, self.logs = [], [], [], [], []
         self.odom = self.create_publisher(Odometry, "odom", QOS)
         stamp = lambda store: (lambda m: store.append((time.monotonic(), m)))  # noqa: E731
-        self.create_subscription(Twist, "cmd_vel", stamp(self.twists), QOS)
+        # One participant holds one type per topic: match the controller's cmd_vel type.
+        self.create_subscription(twist_type, "cmd_vel", stamp(self.twists), QOS)
         self.create_subscription(Float64MultiArray, "steer_position_controller/commands",
                                  stamp(self.steer), QOS)
         self.create_subscription(Float64MultiArray, "wheel_velocity_controller/commands",
                                  stamp(self.wheels), QOS)
         self.create_subscription(Float64MultiArray, "controller_state", stamp(self.states), QOS)
         self.create_subscription(Log, "/rosout", lambda m: m.name == "controller"
-                                 and self.logs.append(m.msg), QoSProfile(depth=1000))
+                                 and self.logs.append(m.msg), ROSOUT_QOS)
 
     def send_odom(self, x, y, yaw, t):
         msg = Odometry()
@@ -57,7 +60,7 @@ def setup():
     def make(**overrides):
         node = ControllerNode(context=context, parameter_overrides=[
             Parameter(k, value=v) for k, v in overrides.items()])
-        peer = Peer(context)
+        peer = Peer(context, TwistStamped if overrides.get("twist_stamped") else Twist)
         spinner = Spinner(context, node, peer)
         wait_for(lambda: peer.count_subscribers("odom") > 0 and
                  node.count_subscribers("controller_state") > 0, what="discovery")
@@ -163,12 +166,25 @@ def test_invalid_live_change_is_rejected_and_changes_nothing(setup, name, value,
     assert node.get_parameter(name).value != value
 
 
-def test_structure_parameters_are_read_only(setup):
+def test_structure_parameters_are_read_only_and_all_are_described(setup):
     node, peer = setup()
     result = node.set_parameters([Parameter("trajectory.name", value="circle")])[0]
     assert not result.successful
+    names = [n for n in node._parameters if n != "use_sim_time"]
+    described = node.describe_parameters(names)
+    assert all(d.description for d in described)
+    assert next(d for d in described if d.name == "inner.eps").description.startswith(
+        "barrier half-width")
+    assert next(d for d in described if d.name == "steering.j1").read_only
 
 
+def test_twist_stamped_on_request(setup):
+    node, peer = setup(twist_stamped=True)
+    drive(peer, 3)
+    wait_for(lambda: len(peer.twists) == 3, what="stamped twists")
+    first = peer.twists[0][1]
+    assert isinstance(first, TwistStamped) and first.header.frame_id == "base_link"
+    assert first.twist.linear.x == pytest.approx(math.hypot(-0.1, -0.35))
 @pytest.mark.parametrize("name, value, message", [
     ("inner.p1", 32, "inner.p1 = 32: must be a positive odd integer"),
     ("outer.p2", 17, "outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2"),

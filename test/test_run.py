@@ -73,9 +73,12 @@ def test_lockstep_records_every_step_and_every_reply(short_run):
     labels = states[0].layout.dim[0].label.split(",")
     stopped = sum(s.data[labels.index("stopped")] for s in states)
     assert len(states) - stopped == counts["/odom"]
+    # Each command topic holds every reply too; after the sim stopped, the controller's
+    # safety stops keep coming until it is shut down, and the very last of those may be
+    # cut off by its exit, so only the replies to odometry are counted exactly.
     for topic in ("/cmd_vel", "/steer_position_controller/commands",
                   "/wheel_velocity_controller/commands"):
-        assert counts[topic] == len(states)
+        assert counts["/odom"] <= counts[topic] <= len(states) + 1
 
 
 def test_three_readers_agree_on_every_message(short_run):

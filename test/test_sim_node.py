@@ -12,7 +12,7 @@ from rcl_interfaces.msg import Log
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -21,6 +21,8 @@ from nfmr_dlsmc.validation import ParameterError
 from nfmr_sim.sim_node import SimNode
 
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+# /rosout keeps its latest messages for late joiners (transient local): so do we.
+ROSOUT_QOS = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class Driver(Node):
@@ -33,7 +35,7 @@ class Driver(Node):
         self.create_subscription(Odometry, "odom", self._on_odom, QOS)
         self.create_subscription(Clock, "/clock", self.clock.append, QOS)
         self.create_subscription(JointState, "joint_states", self.joints.append, QOS)
-        self.create_subscription(Log, "/rosout", self._on_log, QoSProfile(depth=1000))
+        self.create_subscription(Log, "/rosout", self._on_log, ROSOUT_QOS)
         self.steer = self.create_publisher(Float64MultiArray, "steer_position_controller/commands", QOS)
         self.wheels = self.create_publisher(Float64MultiArray, "wheel_velocity_controller/commands", QOS)
         self.twist = self.create_publisher(Twist, "cmd_vel", QOS)
