@@ -45,13 +45,13 @@ class DlsmcController:
                         "eta_hat", "inner_phase", "v_raw", "omega_raw", "v_saturated",
                         "omega_saturated")
 
-    __slots__ = ("_config", "_limits", "_dt", "_filter_gain", "outer", "inner", "_has_previous", "x_e", "y_e", "theta_d",
+    __slots__ = ("_config", "_limits", "_dt", "_filter_tau", "outer", "inner", "_has_previous", "x_e", "y_e", "theta_d",
                  "thetadot_d", "s_theta", "v_raw", "omega_raw", "v_saturated", "omega_saturated")
 
     def __init__(self, config: DlsmcConfig | None = None):
         config = DlsmcConfig() if config is None else config
-        self.outer = BtintsmcOuterLoop(config.outer, config.dt)
-        self.inner = AbfsmcInnerLoop(config.inner, config.dt, config.limits.omega_max)
+        self.outer = BtintsmcOuterLoop(config.outer)
+        self.inner = AbfsmcInnerLoop(config.inner, config.limits.omega_max)
         self.config = config
         self.reset()
 
@@ -66,10 +66,9 @@ class DlsmcController:
         self._config = config
         self._limits = config.limits
         self._dt = config.dt
-        self._filter_gain = config.dt / (config.thetadot_filter + config.dt)  # 1: no filter
+        self._filter_tau = config.thetadot_filter
         self.outer.gains = config.outer
         self.inner.gains = config.inner
-        self.outer.dt = self.inner.dt = config.dt
         self.inner.omega_max = config.limits.omega_max
 
     def reset(self) -> None:
@@ -82,8 +81,8 @@ class DlsmcController:
         self.v_raw = self.omega_raw = 0.0
         self.v_saturated = self.omega_saturated = False
 
-    def step(self, x: float, y: float, theta: float,
-             x_d: float, y_d: float, xdot_d: float, ydot_d: float) -> tuple[float, float]:
+    def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
+             ydot_d: float, dt: float | None = None) -> tuple[float, float]:
         """One control period.
 
         Parameters
@@ -92,6 +91,9 @@ class DlsmcController:
             Measured pose of point P [m, m, rad].
         x_d, y_d, xdot_d, ydot_d : float
             Reference position [m] and velocity [m/s] at this instant.
+        dt : float, optional
+            Time since the previous step [s]; default the configured period. A loop with
+            jitter passes the measured interval so integrals and thetadot_d stay right.
 
         Returns
         -------
@@ -100,16 +102,19 @@ class DlsmcController:
         """
         x_e = x - x_d
         y_e = y - y_d
-        u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d)
+        if dt is None:
+            dt = self._dt
+        u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d, dt)
         theta_d = math.atan2(u_y, u_x)
         if self._has_previous:
-            raw = wrap_angle(theta_d - self.theta_d) / self._dt
-            thetadot_d = self.thetadot_d + self._filter_gain * (raw - self.thetadot_d)
+            raw = wrap_angle(theta_d - self.theta_d) / dt
+            # First-order low-pass; with no filter (tau = 0) the gain is 1.
+            thetadot_d = self.thetadot_d + dt / (self._filter_tau + dt) * (raw - self.thetadot_d)
         else:
             thetadot_d = 0.0
             self._has_previous = True
         s_theta = wrap_angle(theta - theta_d)
-        omega_raw = self.inner.step(s_theta, thetadot_d)
+        omega_raw = self.inner.step(s_theta, thetadot_d, dt)
         v_raw = math.hypot(u_x, u_y)
         v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
             v_raw, omega_raw, self._limits)

@@ -28,8 +28,8 @@ class AbfsmcInnerLoop:
     it last left that phase (the gain learned so far is kept). The barrier phase starts again
     at the next |s| <= eps/2. So the law never divides by zero and never flips sign.
 
-    The integral is a left Riemann sum: eta_hat(0) = 0 and the term of step k enters at
-    step k+1.
+    The integral is a left Riemann sum: eta_hat(0) = 0 and the integrand of step k, times
+    the time to step k+1, enters at step k+1.
 
     Anti-windup (``gains.anti_windup``, off by default as in the paper): the integral does
     not grow during a step whose omega exceeds ``omega_max``. Theorem 1 assumes an
@@ -47,11 +47,10 @@ class AbfsmcInnerLoop:
         True once |s| has reached eps/2 at least once.
     """
 
-    __slots__ = ("dt", "omega_max", "_gains", "_r1", "_eta_integral", "phase", "eta_hat",
+    __slots__ = ("omega_max", "_gains", "_r1", "_eta_integral", "_eta_rate", "phase", "eta_hat",
                  "t_bar_reached")
 
-    def __init__(self, gains: InnerLoopGains, dt: float, omega_max: float = math.inf):
-        self.dt = dt  # [s]
+    def __init__(self, gains: InnerLoopGains, omega_max: float = math.inf):
         self.omega_max = omega_max  # [rad/s], used by the anti-windup option only
         self.gains = gains
         self.reset()
@@ -69,13 +68,19 @@ class AbfsmcInnerLoop:
     def reset(self) -> None:
         """Back to the integral phase with eta_hat = 0."""
         self._eta_integral = 0.0  # [rad/s]
+        self._eta_rate = 0.0  # integrand of the previous step [rad/s^2], 0 when not integrating
         self.phase = INTEGRAL_PHASE
         self.eta_hat = 0.0
         self.t_bar_reached = False
 
-    def step(self, s_theta: float, thetadot_d: float) -> float:
-        """One control period: s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s]."""
+    def step(self, s_theta: float, thetadot_d: float, dt: float) -> float:
+        """One control period: s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s].
+
+        ``dt`` [s] is the time since the previous step; the integral of eq. (12) first adds
+        the previous step's integrand times ``dt``.
+        """
         g = self._gains
+        self._eta_integral += self._eta_rate * dt
         a = abs(s_theta)
         if self.phase == BARRIER_PHASE and a >= g.eps:
             self.phase = INTEGRAL_PHASE  # fallback: re-arm t_bar
@@ -87,6 +92,6 @@ class AbfsmcInnerLoop:
         self.eta_hat = eta
         sign = 1.0 if s_theta > 0.0 else (-1.0 if s_theta < 0.0 else 0.0)
         omega = thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * sign
-        if integrating and not (g.anti_windup and abs(omega) > self.omega_max):
-            self._eta_integral += (g.L0 + g.L1 * a) * self.dt
+        held = g.anti_windup and abs(omega) > self.omega_max
+        self._eta_rate = g.L0 + g.L1 * a if integrating and not held else 0.0
         return omega

@@ -251,7 +251,7 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
 def report(bag_dir, run_dir, params, settings, duration, counts) -> None:
     """Print the metrics table (pybullet vs kinematic model) and write plots."""
     series = read_state_series(bag_dir)
-    ours = state_metrics(series, params.dlsmc.dt)
+    ours = state_metrics(series)
     kin = simulate(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
                    duration, params.dlsmc.dt)
     kin_metrics = simulation_metrics(kin)

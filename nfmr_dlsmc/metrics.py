@@ -2,7 +2,8 @@
 
 All functions take arrays sampled every ``dt`` seconds and return plain floats, so they
 serve the kinematic simulator, the ROS runs and recorded bags alike. Integrals are
-rectangle sums over the samples: IAE = sum |e| dt, ISE = sum e^2 dt.
+rectangle sums over the samples: IAE = sum |e| dt, ISE = sum e^2 dt. Where the sampling is
+uneven (a recorded real-time run), ``dt`` may be an array: each sample's own duration.
 """
 
 from dataclasses import asdict, dataclass
@@ -24,11 +25,11 @@ class ErrorCriteria:
     std: float
 
 
-def error_criteria(error: np.ndarray, dt: float) -> ErrorCriteria:
+def error_criteria(error: np.ndarray, dt) -> ErrorCriteria:
     """IAE = sum |e| dt, ISE = sum e^2 dt and the (population) standard deviation of e."""
     error = np.asarray(error, dtype=float)
-    return ErrorCriteria(iae=float(np.sum(np.abs(error)) * dt),
-                         ise=float(np.sum(error ** 2) * dt),
+    return ErrorCriteria(iae=float(np.sum(np.abs(error) * dt)),
+                         ise=float(np.sum(error ** 2 * dt)),
                          std=float(np.std(error)))
 
 
@@ -47,12 +48,13 @@ def convergence_time(t: np.ndarray, distance: np.ndarray,
     return float(t[above[-1]])
 
 
-def total_variation_rate(signal: np.ndarray, dt: float) -> float:
+def total_variation_rate(signal: np.ndarray, dt) -> float:
     """Chattering measure: sum |signal[k+1] - signal[k]| per second of signal [unit/s]."""
     signal = np.asarray(signal, dtype=float)
     if signal.size < 2:
         return 0.0
-    return float(np.sum(np.abs(np.diff(signal))) / ((signal.size - 1) * dt))
+    span = np.sum(np.broadcast_to(np.asarray(dt, dtype=float), signal.shape)[:-1])
+    return float(np.sum(np.abs(np.diff(signal))) / span)
 
 
 @dataclass(frozen=True)
@@ -100,9 +102,20 @@ class TrackingMetrics:
         return asdict(self)
 
 
+def sample_durations(t: np.ndarray) -> np.ndarray:
+    """Each sample's duration [s] for uneven sampling: the time to the next sample (the
+    last sample gets the median)."""
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        return np.zeros_like(t)
+    steps = np.diff(t)
+    return np.append(steps, np.median(steps))
+
+
 def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega,
-                     dt: float) -> TrackingMetrics:
-    """Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s].
+                     dt) -> TrackingMetrics:
+    """Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s] (a float,
+    or an array of per-sample durations, see :func:`sample_durations`).
 
     Parameters
     ----------
@@ -131,7 +144,8 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega,
     else:
         after = t >= t_conv
         after_theta = float(np.max(np.abs(theta_e[after])))
-        after_tv = total_variation_rate(np.asarray(omega)[after], dt)
+        weights = np.broadcast_to(np.asarray(dt, dtype=float), t.shape)[after]
+        after_tv = total_variation_rate(np.asarray(omega)[after], weights)
     return TrackingMetrics(
         iae=dist.iae, ise=dist.ise, std=dist.std, t_conv=t_conv,
         final_distance=float(distance[-1]),

@@ -19,7 +19,7 @@ class BtintsmcOuterLoop:
         u_y = v_d sin(theta_r) - k2 |s_y|^(q3/p3) erf(h s_y) - C2 alpha(y_e),
 
     with v_d cos(theta_r) = xdot_d and v_d sin(theta_r) = ydot_d (eqs 6, 7). The integral
-    is a left Riemann sum over the control period: the term of step k enters at step k+1.
+    is a left Riemann sum: alpha of step k, times the time to step k+1, enters at step k+1.
 
     Attributes (after a step)
     -------------------------
@@ -29,11 +29,10 @@ class BtintsmcOuterLoop:
         alpha(x_e), alpha(y_e) of eq. (33) [-].
     """
 
-    __slots__ = ("dt", "_gains", "_r2", "_r3", "_started", "_ex0", "_ey0", "_int_ax", "_int_ay",
+    __slots__ = ("_gains", "_r2", "_r3", "_started", "_ex0", "_ey0", "_int_ax", "_int_ay",
                  "s_x", "s_y", "alpha_x", "alpha_y")
 
-    def __init__(self, gains: OuterLoopGains, dt: float):
-        self.dt = dt  # [s]
+    def __init__(self, gains: OuterLoopGains):
         self.gains = gains
         self.reset()
 
@@ -60,10 +59,18 @@ class BtintsmcOuterLoop:
         self.alpha_x = 0.0
         self.alpha_y = 0.0
 
-    def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float) -> tuple[float, float]:
-        """One control period: errors [m] and reference velocity [m/s] -> (u_x, u_y) [m/s]."""
+    def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
+             dt: float) -> tuple[float, float]:
+        """One control period: errors [m] and reference velocity [m/s] -> (u_x, u_y) [m/s].
+
+        ``dt`` [s] is the time since the previous step: the integral first adds the
+        previous step's alpha times ``dt`` (a left Riemann sum), then s is formed.
+        """
         g = self._gains
-        if not self._started:
+        if self._started:
+            self._int_ax += self.alpha_x * dt
+            self._int_ay += self.alpha_y * dt
+        else:
             self._started = True
             self._ex0, self._ey0 = x_e, y_e
         r3, k2, h = self._r3, g.k2, g.h
@@ -73,8 +80,6 @@ class BtintsmcOuterLoop:
         s_y = y_e - self._ey0 + g.C2 * self._int_ay
         u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - g.C1 * ax
         u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - g.C2 * ay
-        self._int_ax += ax * self.dt
-        self._int_ay += ay * self.dt
         self.s_x, self.s_y = s_x, s_y
         self.alpha_x, self.alpha_y = ax, ay
         return u_x, u_y

@@ -11,7 +11,8 @@ from mcap.reader import make_reader  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 
-from nfmr_dlsmc.metrics import TrackingMetrics, tracking_metrics  # noqa: E402
+from nfmr_dlsmc.metrics import (TrackingMetrics, sample_durations,  # noqa: E402
+                                tracking_metrics)
 from nfmr_dlsmc.tracking_session import STATE_FIELDS  # noqa: E402
 
 STATE_TOPIC = "/controller_state"
@@ -44,13 +45,14 @@ def read_state_series(bag: Path) -> dict:
     return {name: table[:, i] for i, name in enumerate(names)}
 
 
-def state_metrics(series: dict, dt: float) -> TrackingMetrics:
-    """:func:`~nfmr_dlsmc.metrics.tracking_metrics` of the tracking ticks of a run
-    (ticks where safety stopped the robot are left out)."""
+def state_metrics(series: dict) -> TrackingMetrics:
+    """:func:`~nfmr_dlsmc.metrics.tracking_metrics` of the tracking ticks of a run, each
+    weighted by its own duration (ticks where safety stopped the robot are left out)."""
     keep = series["stopped"] == 0.0
     s = {k: v[keep] for k, v in series.items()}
     return tracking_metrics(s["t"], s["x"], s["y"], s["theta"], s["x_d"], s["y_d"],
-                            s["theta_d"], s["theta_r"], s["v"], s["omega"], dt)
+                            s["theta_d"], s["theta_r"], s["v"], s["omega"],
+                            sample_durations(s["t"]))
 
 
 def plot_run(series: dict, out_dir: Path, reference=None, label: str = "pybullet") -> list[Path]:

@@ -71,6 +71,7 @@ class TrackingSession:
         self._bad_odometry = None  # reason while the latest odometry is invalid
         self._t0 = None  # control time [s] of the first valid odometry
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
+        self._tracked_last = False  # whether the previous tick tracked (for the step length)
         self._steer = np.zeros(4)
         self._fault_reported = None
 
@@ -119,9 +120,16 @@ class TrackingSession:
             report = (f"stopping the robot: {fault}" if fault
                       else "fresh odometry: tracking resumed")
             self._fault_reported = kind
+        previous_t = self._t if self._tracked_last else None
         if not fault:
             self._t = control_time - self._t0
+        self._tracked_last = not fault
         t = self._t  # a stopped robot reports where tracking stopped
+        # The measured step, so that a jittery loop integrates over the time that passed;
+        # the nominal period for the first tick after a start or a stop.
+        step = None if previous_t is None else t - previous_t
+        if step is not None and not 0.0 < step <= 100.0 * self.params.dlsmc.dt:
+            step = None
         x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
         x, y, theta = self._pose
         ctrl = self.controller
@@ -130,7 +138,7 @@ class TrackingSession:
             steer, wheels = self._steer.copy(), np.zeros(4)
             limited = False
         else:
-            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step)
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited

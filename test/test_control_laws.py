@@ -14,14 +14,14 @@ R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
 
 
 def test_outer_loop_first_two_steps():
-    loop = BtintsmcOuterLoop(OuterLoopGains(), DT)
+    loop = BtintsmcOuterLoop(OuterLoopGains())
     # Step 0: s = 0 (eq. 32 at t = 0), full-speed phase alpha = sign(e).
-    u_x, u_y = loop.step(1.0, 4.0, 0.5, 0.25)
+    u_x, u_y = loop.step(1.0, 4.0, 0.5, 0.25, DT)
     assert (loop.s_x, loop.s_y) == (0.0, 0.0)
     assert u_x == pytest.approx(0.5 - 0.6 * 1.0)
     assert u_y == pytest.approx(0.25 - 0.6 * 1.0)
     # Step 1: s = e - e(0) + C alpha(e(0)) dt.
-    u_x, u_y = loop.step(0.999, 3.9, 0.5, 0.25)
+    u_x, u_y = loop.step(0.999, 3.9, 0.5, 0.25, DT)
     s_x = 0.999 - 1.0 + 0.6 * DT
     s_y = 3.9 - 4.0 + 0.6 * DT
     assert loop.s_x == pytest.approx(s_x)
@@ -32,9 +32,9 @@ def test_outer_loop_first_two_steps():
 
 def test_outer_loop_stable_tracking_phase_uses_sine_rate():
     gains = OuterLoopGains(C1=0.4, C2=0.8, k2=2.0, h=3.0)
-    loop = BtintsmcOuterLoop(gains, DT)
-    loop.step(0.2, -0.1, 0.0, 0.0)
-    u_x, u_y = loop.step(0.19, -0.12, 0.1, -0.2)
+    loop = BtintsmcOuterLoop(gains)
+    loop.step(0.2, -0.1, 0.0, 0.0, DT)
+    u_x, u_y = loop.step(0.19, -0.12, 0.1, -0.2, DT)
     a_x0 = math.sin(math.pi / 2 * (0.2 / 0.5) ** R2)
     a_y0 = -math.sin(math.pi / 2 * (0.1 / 0.5) ** R2)
     s_x = 0.19 - 0.2 + 0.4 * a_x0 * DT
@@ -46,21 +46,21 @@ def test_outer_loop_stable_tracking_phase_uses_sine_rate():
 
 
 def test_inner_loop_integral_phase_accumulates_eta():
-    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
-    w0 = loop.step(0.5, 0.2)
+    loop = AbfsmcInnerLoop(InnerLoopGains())
+    w0 = loop.step(0.5, 0.2, DT)
     assert loop.eta_hat == 0.0 and loop.phase == INTEGRAL_PHASE
     assert w0 == pytest.approx(0.2 - 0.5 ** R1)
-    w1 = loop.step(-0.4, 0.0)
+    w1 = loop.step(-0.4, 0.0, DT)
     eta = (1.0 + 1.2 * 0.5) * DT
     assert loop.eta_hat == pytest.approx(eta)
     assert w1 == pytest.approx(0.4 ** R1 + eta)
 
 
 def test_inner_loop_barrier_phase_value():
-    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
-    loop.step(0.004, 0.0)  # |s| <= eps/2: t_bar reached
+    loop = AbfsmcInnerLoop(InnerLoopGains())
+    loop.step(0.004, 0.0, DT)  # |s| <= eps/2: t_bar reached
     assert loop.phase == BARRIER_PHASE and loop.t_bar_reached
-    w = loop.step(0.008, 0.3)
+    w = loop.step(0.008, 0.3, DT)
     eta = 1.0 * 0.008 / (0.01 - 0.008)
     assert loop.eta_hat == pytest.approx(eta)
     assert w == pytest.approx(0.3 - 0.008 ** R1 - eta)
@@ -68,26 +68,26 @@ def test_inner_loop_barrier_phase_value():
 
 @pytest.mark.parametrize("s_out", [0.01, 0.0100001, 0.05, -0.01, -0.3])
 def test_barrier_fallback_never_divides_by_zero_nor_flips_sign(s_out):
-    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
-    loop.step(0.3, 0.0)
-    loop.step(0.2, 0.0)
+    loop = AbfsmcInnerLoop(InnerLoopGains())
+    loop.step(0.3, 0.0, DT)
+    loop.step(0.2, 0.0, DT)
     learned = (1.0 + 1.2 * 0.3) * DT + (1.0 + 1.2 * 0.2) * DT
-    loop.step(0.001, 0.0)  # enters the barrier phase
+    loop.step(0.001, 0.0, DT)  # enters the barrier phase
     assert loop.phase == BARRIER_PHASE
-    w = loop.step(s_out, 0.0)  # |s| >= eps: fallback to the integral phase
+    w = loop.step(s_out, 0.0, DT)  # |s| >= eps: fallback to the integral phase
     assert loop.phase == INTEGRAL_PHASE
     assert math.isfinite(w)
     assert loop.eta_hat == pytest.approx(learned)  # the integral resumes where it stopped
     assert math.copysign(1.0, w) == -math.copysign(1.0, s_out)
-    loop.step(0.004, 0.0)  # back inside eps/2: barrier again
+    loop.step(0.004, 0.0, DT)  # back inside eps/2: barrier again
     assert loop.phase == BARRIER_PHASE
 
 
 def test_inner_loop_drives_s_towards_zero_in_the_band():
-    loop = AbfsmcInnerLoop(InnerLoopGains(), DT)
-    loop.step(0.001, 0.0)
+    loop = AbfsmcInnerLoop(InnerLoopGains())
+    loop.step(0.001, 0.0, DT)
     for s in (0.0099, 0.005, -0.005, -0.0099):
-        w = loop.step(s, 0.0)
+        w = loop.step(s, 0.0, DT)
         assert w * s < 0.0  # sdot = omega - thetadot_d has the opposite sign of s
 
 
@@ -138,3 +138,22 @@ def test_live_config_change_takes_effect_next_step_and_keeps_state():
     assert ctrl.v_raw == pytest.approx(math.hypot(
         0.5 - abs(1.2 * DT) ** R3 * math.erf(1.2 * DT) - 1.2,
         0.25 - abs(1.2 * DT) ** R3 * math.erf(1.2 * DT) - 1.2))
+
+
+def test_a_longer_step_integrates_over_its_own_length():
+    ctrl = DlsmcController()
+    ctrl.step(1.0, 4.0, 0.0, 0.0, 0.0, 0.5, 0.25)
+    first_theta_d = ctrl.theta_d
+    ctrl.step(1.0, 4.0, 0.0, 0.0, 0.0, 0.5, 0.25, dt=0.004)
+    assert ctrl.outer.s_x == pytest.approx(0.6 * 0.004)  # C1 alpha(x_e) over 4 ms
+    assert ctrl.thetadot_d == pytest.approx((ctrl.theta_d - first_theta_d) / 0.004)
+    assert ctrl.inner.eta_hat == pytest.approx((1.0 + 1.2 * abs(first_theta_d)) * 0.004)
+
+
+def test_thetadot_filter_is_a_first_order_low_pass():
+    ctrl = DlsmcController(DlsmcConfig(thetadot_filter=0.009))
+    ctrl.step(0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0)
+    before = ctrl.theta_d
+    ctrl.step(0.0, 0.0, 0.0, -1.0, 0.5, 0.0, 0.0)
+    raw = math.remainder(ctrl.theta_d - before, 2 * math.pi) / DT
+    assert ctrl.thetadot_d == pytest.approx(0.1 * raw)  # gain dt / (tau + dt) = 0.1

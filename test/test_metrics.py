@@ -44,3 +44,14 @@ def test_tracking_metrics_wraps_heading_errors():
     assert m.max_abs_theta_e_after_conv == pytest.approx(0.02)
     assert m.max_abs_omega == 2.0 and m.max_v == 1.0
     assert m.omega_tv_after_conv == pytest.approx(1.9 / ((n - 199 - 1) * dt))
+
+
+def test_uneven_sampling_weighs_each_sample_by_its_duration():
+    from nfmr_dlsmc.metrics import sample_durations
+
+    t = np.array([0.0, 0.001, 0.003, 0.004])
+    np.testing.assert_allclose(sample_durations(t), [0.001, 0.002, 0.001, 0.001])
+    c = error_criteria(np.array([1.0, 2.0, 3.0, 4.0]), sample_durations(t))
+    assert c.iae == pytest.approx(0.001 + 0.004 + 0.003 + 0.004)
+    assert total_variation_rate(np.array([0.0, 1.0, 0.0, 1.0]), sample_durations(t)) == \
+        pytest.approx(3.0 / 0.004)
