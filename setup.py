@@ -40,6 +40,8 @@ setup(
             "sim = nfmr_sim.sim_node:main",
             "controller = nfmr_dlsmc.controller_node:main",
             "nfmr-run = nfmr_dlsmc.launcher:main",
+            "nfmr-analyze = nfmr_dlsmc.analyze_cli:main",
+            "nfmr-replay = nfmr_dlsmc.replay_cli:main",
         ],
     },
 )

@@ -27,7 +27,8 @@ from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.metrics import simulation_metrics
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
 from nfmr_dlsmc.recorder_node import RecorderNode
-from nfmr_dlsmc.run_analysis import plot_run, read_state_series, state_metrics
+from nfmr_dlsmc.bag_reader import read_bag
+from nfmr_dlsmc.run_analysis import metrics_table, plot_runs, state_metrics, state_series
 from nfmr_dlsmc.validation import ParameterError
 from nfmr_sim.sim_params import sim_settings
 
@@ -250,7 +251,7 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
 
 def report(bag_dir, run_dir, params, settings, duration, counts) -> None:
     """Print the metrics table (pybullet vs kinematic model) and write plots."""
-    series = read_state_series(bag_dir)
+    series = state_series(read_bag(bag_dir, topics=["/controller_state"]))
     ours = state_metrics(series)
     kin = simulate(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
                    duration, params.dlsmc.dt)
@@ -258,17 +259,8 @@ def report(bag_dir, run_dir, params, settings, duration, counts) -> None:
     kin_series = {"t": kin.t, "x": kin.state[:, 0], "y": kin.state[:, 1],
                   "x_d": kin.reference[:, 0], "y_d": kin.reference[:, 1],
                   "theta_e": kin.telemetry["theta_e"], "v": kin.v, "omega": kin.omega}
-    plot_run(series, run_dir, reference=kin_series)
-    rows = [("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise"),
-            ("STD of distance [m]", "std"), ("convergence time (1 mm) [s]", "t_conv"),
-            ("final distance [m]", "final_distance"),
-            ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
-            ("max v [m/s]", "max_v"), ("max |omega| [rad/s]", "max_abs_omega")]
-    a, b = ours.as_dict(), kin_metrics.as_dict()
-    fmt = lambda v: "never" if v is None else f"{v:.4f}"  # noqa: E731
-    print(f"{'metric':<36} {'pybullet':>10} {'kinematic':>10}")
-    for label, key in rows:
-        print(f"{label:<36} {fmt(a[key]):>10} {fmt(b[key]):>10}")
+    plot_runs([("pybullet", series), ("kinematic model", kin_series)], run_dir)
+    print(metrics_table([("pybullet", ours), ("kinematic", kin_metrics)]))
     stopped = int(series["stopped"].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f"{sum(counts.values())} messages recorded; plots in {run_dir}")

@@ -1,4 +1,4 @@
-"""Metrics and plots of a recorded run, from its ``controller_state`` topic."""
+"""Metrics and plots of recorded runs, from their ``controller_state`` topic."""
 
 from pathlib import Path
 
@@ -7,42 +7,51 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from mcap.reader import make_reader  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 
+from nfmr_dlsmc.bag_reader import BagContents, BagError  # noqa: E402
 from nfmr_dlsmc.metrics import (TrackingMetrics, sample_durations,  # noqa: E402
                                 tracking_metrics)
 from nfmr_dlsmc.tracking_session import STATE_FIELDS  # noqa: E402
 
 STATE_TOPIC = "/controller_state"
+#: The state fields the metrics need.
+NEEDED_FIELDS = ("t", "x", "y", "theta", "x_d", "y_d", "theta_d", "theta_r", "theta_e", "v",
+                 "omega", "stopped")
 
 
-def bag_file(bag: Path) -> Path:
-    """The ``.mcap`` file of a bag directory (or the file itself)."""
-    bag = Path(bag)
-    if bag.is_file():
-        return bag
-    files = sorted(bag.glob("*.mcap"))
-    if not files:
-        raise FileNotFoundError(f"no .mcap file in {bag}")
-    return files[0]
+def state_series(contents: BagContents) -> dict:
+    """The ``controller_state`` messages of a read bag as arrays keyed by field name.
 
+    The field names come from the messages' layout label (``t,x,y,...``), else
+    :data:`~nfmr_dlsmc.tracking_session.STATE_FIELDS`.
 
-def read_state_series(bag: Path) -> dict:
-    """Every ``controller_state`` message of a bag as arrays keyed by field name."""
-    rows = []
-    names = None
-    with bag_file(bag).open("rb") as stream:
-        for _, channel, message in make_reader(stream).iter_messages(topics=[STATE_TOPIC]):
-            msg = deserialize_message(message.data, Float64MultiArray)
-            if names is None:
-                names = msg.layout.dim[0].label.split(",") if msg.layout.dim else STATE_FIELDS
-            rows.append(msg.data.tolist() if hasattr(msg.data, "tolist") else list(msg.data))
-    if not rows:
-        raise ValueError(f"{bag}: no {STATE_TOPIC} messages")
-    table = np.array(rows)
-    return {name: table[:, i] for i, name in enumerate(names)}
+    Raises
+    ------
+    BagError
+        No such topic, a different type, or fields missing.
+    """
+    messages = contents.of(STATE_TOPIC)
+    if not messages:
+        have = ", ".join(sorted(contents.topics)) or "none"
+        raise BagError(f"{contents.path}: no {STATE_TOPIC} messages, which the metrics need "
+                       f"(topics in the bag: {have})")
+    type_name = messages[0].type_name
+    if type_name != "std_msgs/msg/Float64MultiArray":
+        raise BagError(f"{contents.path}: {STATE_TOPIC} has type {type_name}, expected "
+                       "std_msgs/msg/Float64MultiArray")
+    first = deserialize_message(messages[0].data, Float64MultiArray)
+    names = first.layout.dim[0].label.split(",") if first.layout.dim else list(STATE_FIELDS)
+    missing = [n for n in NEEDED_FIELDS if n not in names]
+    if missing:
+        raise BagError(f"{contents.path}: {STATE_TOPIC} lacks the fields {', '.join(missing)}")
+    rows = np.array([np.asarray(deserialize_message(m.data, Float64MultiArray).data)
+                     for m in messages if len(m.data)], dtype=float)
+    if rows.ndim != 2 or rows.shape[1] != len(names):
+        raise BagError(f"{contents.path}: {STATE_TOPIC} messages do not all have "
+                       f"{len(names)} values")
+    return {name: rows[:, i] for i, name in enumerate(names)}
 
 
 def state_metrics(series: dict) -> TrackingMetrics:
@@ -55,14 +64,21 @@ def state_metrics(series: dict) -> TrackingMetrics:
                             sample_durations(s["t"]))
 
 
-def plot_run(series: dict, out_dir: Path, reference=None, label: str = "pybullet") -> list[Path]:
-    """Trajectory, distance error, heading error and inputs as PNGs in ``out_dir``.
+def plot_runs(runs: list, out_dir: Path) -> list[Path]:
+    """Overlay runs: trajectory, distance error, heading error and inputs, as PNGs.
 
-    ``reference`` is an optional second run (the kinematic model's, as a dict with the
-    same keys) drawn dashed for comparison.
+    Parameters
+    ----------
+    runs : list of (label, series)
+        Each series a dict with at least t, x, y, x_d, y_d, theta_e, v, omega; the
+        reference is drawn from the first run.
+    out_dir : Path
     """
     out_dir = Path(out_dir)
-    runs = [(label, series, "-")] + ([("kinematic model", reference, "--")] if reference else [])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    styled = [(label, s, colours[i % len(colours)], "-" if i == 0 else "--")
+              for i, (label, s) in enumerate(runs)]
     paths = []
 
     def save(fig, name):
@@ -72,38 +88,57 @@ def plot_run(series: dict, out_dir: Path, reference=None, label: str = "pybullet
         plt.close(fig)
         paths.append(path)
 
+    first = runs[0][1]
     fig, ax = plt.subplots(figsize=(8, 4))
-    ax.plot(series["x_d"], series["y_d"], color="0.6", lw=3, label="reference")
-    for name, s, style in runs:
-        ax.plot(s["x"], s["y"], style, label=name)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.plot(first["x_d"], first["y_d"], color="0.6", lw=3, label="reference")
+    for label, s, colour, style in styled:
+        ax.plot(s["x"], s["y"], style, color=colour, label=label)
+    ax.set(xlabel="x [m]", ylabel="y [m]", title="Trajectory of P")
     ax.set_aspect("equal", adjustable="datalim")
     ax.legend()
-    ax.set_title("Trajectory of P")
     save(fig, "trajectory.png")
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for name, s, style in runs:
+    for label, s, colour, style in styled:
         d = np.hypot(s["x"] - s["x_d"], s["y"] - s["y_d"])
-        axes[0].semilogy(s["t"], np.maximum(d, 1e-9), style, label=name)
-        axes[1].plot(s["t"], s["theta_e"], style, label=name)
+        axes[0].semilogy(s["t"], np.maximum(d, 1e-9), style, color=colour, label=label)
+        axes[1].plot(s["t"], s["theta_e"], style, color=colour, label=label)
     axes[0].axhline(1e-3, color="k", lw=0.8, ls=":", label="1 mm")
     axes[0].set_ylabel("distance error [m]")
-    axes[1].set_ylabel("theta_e [rad]")
-    axes[1].set_xlabel("t [s]")
+    axes[1].set(ylabel="theta_e [rad]", xlabel="t [s]")
     for ax in axes:
         ax.legend()
     save(fig, "errors.png")
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for name, s, style in runs:
-        axes[0].plot(s["t"], s["v"], style, label=name)
-        axes[1].plot(s["t"], s["omega"], style, label=name, lw=0.6)
+    for label, s, colour, style in styled:
+        axes[0].plot(s["t"], s["v"], style, color=colour, label=label)
+        axes[1].plot(s["t"], s["omega"], style, color=colour, label=label, lw=0.6)
     axes[0].set_ylabel("v [m/s]")
-    axes[1].set_ylabel("omega [rad/s]")
-    axes[1].set_xlabel("t [s]")
+    axes[1].set(ylabel="omega [rad/s]", xlabel="t [s]")
     for ax in axes:
         ax.legend()
     save(fig, "inputs.png")
     return paths
+
+
+#: Rows of the metrics table: (label, TrackingMetrics field).
+TABLE_ROWS = (("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise"),
+              ("STD of distance [m]", "std"), ("convergence time (1 mm) [s]", "t_conv"),
+              ("final distance [m]", "final_distance"),
+              ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
+              ("IAE of theta_e [rad*s]", "theta_e_iae"), ("max v [m/s]", "max_v"),
+              ("max |omega| [rad/s]", "max_abs_omega"))
+
+
+def metrics_table(columns: list) -> str:
+    """A text table, one column per (label, TrackingMetrics)."""
+    width = max([12] + [len(label) for label, _ in columns])
+    lines = [f"{'metric':<36}" + "".join(f" {label:>{width}}" for label, _ in columns)]
+    for row, key in TABLE_ROWS:
+        cells = []
+        for _, metrics in columns:
+            value = getattr(metrics, key)
+            cells.append(f" {'never' if value is None else f'{value:.4f}':>{width}}")
+        lines.append(f"{row:<36}" + "".join(cells))
+    return "\n".join(lines)

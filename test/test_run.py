@@ -139,3 +139,22 @@ def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     bag = Path(stdout.strip().splitlines()[-1])
     with Reader(bag) as reader:
         assert reader.message_count > 0
+
+
+def test_analyze_gives_the_metrics_the_launcher_printed(short_run):
+    stdout = short_run[1]
+    bag = Path(stdout.strip().splitlines()[-1])
+    printed = {}
+    for line in stdout.splitlines():
+        for label in ("IAE of distance", "ISE of distance", "STD of distance", "final distance"):
+            if line.startswith(label):
+                printed[label] = float(line[36:].split()[0])  # the pybullet column
+    proc = subprocess.run([str(Path(sys.executable).parent / "nfmr-analyze"), str(bag)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    analyzed = {}
+    for line in proc.stdout.splitlines():
+        for label in printed:
+            if line.startswith(label):
+                analyzed[label] = float(line[36:].split()[0])
+    assert len(printed) == 4 and analyzed == printed
