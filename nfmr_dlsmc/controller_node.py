@@ -41,6 +41,18 @@ READ_ONLY_PREFIXES = ("control_rate", "trajectory.", "steering.", "geometry.", "
 TICK_SOURCES = ("odom", "clock")
 
 
+def _session_options(values: dict) -> dict:
+    """The TrackingSession options among the node's parameter values, validated."""
+    frame = values["odom_frame"]
+    if not frame:
+        raise ParameterError("odom_frame", frame, "must be a frame name")
+    return {"odom_timeout": check_positive("odom_timeout", values["odom_timeout"], "s"),
+            "odom_frame": frame,
+            "max_jump": check_positive("max_odom_jump", values["max_odom_jump"], "m"),
+            "restart_threshold": check_positive("restart_threshold",
+                                                values["restart_threshold"], "s")}
+
+
 def _yaw(q) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
@@ -55,12 +67,11 @@ class ControllerNode(Node):
         values = declare_parameters(self, defaults, read_only, parameter_descriptions())
         self._values = values
         params = controller_params(values)
-        odom_timeout = check_positive("odom_timeout", values["odom_timeout"], "s")
+        self.session = TrackingSession(params, **_session_options(values))
         if values["tick_source"] not in TICK_SOURCES:
             raise ParameterError("tick_source", values["tick_source"],
                                  f"must be one of {', '.join(TICK_SOURCES)}")
         check_positive("watchdog_period", values["watchdog_period"], "s")
-        self.session = TrackingSession(params, odom_timeout)
         self._lock = threading.Lock()
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         twist_type = TwistStamped if values["twist_stamped"] else Twist
@@ -91,13 +102,14 @@ class ControllerNode(Node):
             candidate[p.name] = p.value.tolist() if hasattr(p.value, "tolist") else p.value
         try:
             params = controller_params(candidate)
-            timeout = check_positive("odom_timeout", candidate["odom_timeout"], "s")
+            options = _session_options(candidate)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         with self._lock:
             self._values = candidate
             self.session.set_params(params)
-            self.session.odom_timeout = timeout
+            for name, value in options.items():
+                setattr(self.session, name, value)
         return SetParametersResult(successful=True)
 
     # -- ticks ------------------------------------------------------------------------------
@@ -106,11 +118,12 @@ class ControllerNode(Node):
         p = msg.pose.pose
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         wall = time.monotonic()
+        by_odom = self._values["tick_source"] == "odom"
         with self._lock:
-            self.session.on_odometry(p.position.x, p.position.y, _yaw(p.orientation), wall,
-                                     stamp if self._values["tick_source"] == "odom"
-                                     else self._now())
-        if self._values["tick_source"] == "odom":
+            accepted = self.session.on_odometry(
+                p.position.x, p.position.y, _yaw(p.orientation), wall,
+                stamp if by_odom else self._now(), stamp, msg.header.frame_id)
+        if by_odom and accepted:
             self._tick(stamp)
 
     def _now(self) -> float:

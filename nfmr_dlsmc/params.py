@@ -110,7 +110,8 @@ def _check_trajectory_name(name: str, value) -> None:
 def node_option_defaults() -> dict:
     """Options of the controller node itself (validated there; ignored by the core)."""
     return {"odom_timeout": 0.25, "tick_source": "odom", "twist_stamped": False,
-            "watchdog_period": 0.01}
+            "watchdog_period": 0.01, "odom_frame": "odom", "max_odom_jump": 10.0,
+            "restart_threshold": 1.0}
 
 
 def parameter_descriptions() -> dict:
@@ -151,6 +152,10 @@ def parameter_descriptions() -> dict:
         "tick_source": "odom: one step per odometry message; clock: own loop at control_rate",
         "twist_stamped": "publish cmd_vel as TwistStamped",
         "watchdog_period": "how often stale odometry is checked [s] (> 0)",
+        "odom_frame": "frame odometry must be in; other frames stop the robot",
+        "max_odom_jump": "larger position jumps between odometry messages stop the robot [m] (> 0)",
+        "restart_threshold": "a stamp this much older than the last means the source "
+                             "restarted: tracking starts over [s] (> 0)",
     }
     for kind, cls in TRAJECTORY_TYPES.items():
         for f in fields(cls):

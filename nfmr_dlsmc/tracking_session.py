@@ -60,15 +60,27 @@ class TrackingSession:
     params : ControllerParams
     odom_timeout : float
         Odometry older than this [s, wall clock] stops the robot.
+    odom_frame : str
+        The frame odometry must be expressed in.
+    max_jump : float
+        Largest accepted change of position between two odometry messages [m].
+    restart_threshold : float
+        A stamp this much older than the last one [s] means the source restarted.
     """
 
-    def __init__(self, params: ControllerParams, odom_timeout: float):
+    def __init__(self, params: ControllerParams, odom_timeout: float, odom_frame: str = "odom",
+                 max_jump: float = 10.0, restart_threshold: float = 1.0):
         self.params = params
         self.odom_timeout = odom_timeout
+        self.odom_frame = odom_frame
+        self.max_jump = max_jump
+        self.restart_threshold = restart_threshold
         self.controller = DlsmcController(params.dlsmc)
         self._pose = None  # latest valid (x, y, theta)
         self._pose_wall = None  # wall time [s] it arrived
-        self._bad_odometry = None  # reason while the latest odometry is invalid
+        self._bad_odometry = None  # (kind, reason) while the latest odometry is invalid
+        self._stamp = None  # stamp [s] of the latest accepted odometry
+        self.restarts = 0
         self._t0 = None  # control time [s] of the first valid odometry
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
         self._tracked_last = False  # whether the previous tick tracked (for the step length)
@@ -86,27 +98,62 @@ class TrackingSession:
         self.controller.config = params.dlsmc
 
     def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
-                    control_time: float) -> None:
-        """Odometry of P arrived (pose [m, m, rad]) at ``wall_time`` / ``control_time`` [s]."""
-        if not all(math.isfinite(v) for v in (x, y, theta)):
-            self._bad_odometry = f"odometry is not finite: ({x}, {y}, {theta})"
-            return
+                    control_time: float, stamp: float | None = None,
+                    frame_id: str | None = None) -> bool:
+        """Odometry of P arrived: pose [m, m, rad], its ``stamp`` and ``frame_id``, received
+        at ``wall_time`` / ``control_time`` [s].
+
+        Returns
+        -------
+        bool
+            Whether to tick on it: False only for an out-of-order message, which is ignored.
+        """
+        stamp = control_time if stamp is None else stamp
+        if frame_id is not None and frame_id != self.odom_frame:
+            self._bad_odometry = ("frame", f"odometry is in frame {frame_id!r}, "
+                                           f"expected {self.odom_frame!r}")
+            return True
+        if not all(math.isfinite(v) for v in (x, y, theta, stamp)):
+            self._bad_odometry = ("finite", f"odometry is not finite: ({x}, {y}, {theta})")
+            return True
+        if self._stamp is not None and stamp < self._stamp:
+            if self._stamp - stamp < self.restart_threshold:
+                return False  # out of order: ignore
+            self._restart()
+        elif self._pose is not None:
+            jump = math.hypot(x - self._pose[0], y - self._pose[1])
+            if jump > self.max_jump:
+                self._bad_odometry = ("jump", f"odometry jumped {jump:.2f} m in one message "
+                                              f"(limit {self.max_jump:g} m)")
+                return True
         self._bad_odometry = None
         self._pose = (x, y, theta)
         self._pose_wall = wall_time
+        self._stamp = stamp
         if self._t0 is None:
             self._t0 = control_time
+        return True
+
+    def _restart(self) -> None:
+        """The odometry source started over: so does tracking."""
+        self.controller.reset()
+        self._pose = self._t0 = None
+        self._t = 0.0
+        self._tracked_last = False
+        self._fault_reported = ("restart", self.restarts)
+        self.restarts += 1
 
     def odometry_age(self, wall_time: float) -> float:
         """Wall time [s] since the latest valid odometry (inf before any)."""
         return math.inf if self._pose_wall is None else wall_time - self._pose_wall
 
-    def _fault(self, wall_time: float) -> str | None:
+    def _fault(self, wall_time: float) -> tuple | None:
+        """(kind, reason) of what stops the robot now, or None."""
         if self._bad_odometry is not None:
             return self._bad_odometry
         age = self.odometry_age(wall_time)
         if age > self.odom_timeout:
-            return f"odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)"
+            return "stale", f"odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)"
         return None
 
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
@@ -114,11 +161,15 @@ class TrackingSession:
         if self._t0 is None:
             return None
         fault = self._fault(wall_time)
-        kind = None if fault is None else fault.split(":")[0].split(" is ")[0]
+        kind = None if fault is None else fault[0]
         report = None
         if kind != self._fault_reported:  # log each fault once, not each tick it lasts
-            report = (f"stopping the robot: {fault}" if fault
-                      else "fresh odometry: tracking resumed")
+            if fault:
+                report = f"stopping the robot: {fault[1]}"
+            elif isinstance(self._fault_reported, tuple):
+                report = "odometry restarted (its stamps went back): tracking starts over"
+            else:
+                report = "valid odometry: tracking resumed"
             self._fault_reported = kind
         previous_t = self._t if self._tracked_last else None
         if not fault:

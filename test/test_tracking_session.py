@@ -1,0 +1,87 @@
+"""What the controller does with each kind of odometry (ROS-free session logic)."""
+
+import math
+
+import pytest
+
+from nfmr_dlsmc.params import ControllerParams
+from nfmr_dlsmc.tracking_session import STATE_FIELDS, TrackingSession
+
+T_INDEX = STATE_FIELDS.index("t")
+
+
+def session():
+    return TrackingSession(ControllerParams(), odom_timeout=0.1)
+
+
+def feed(s, x, y, stamp, frame="odom", wall=None):
+    wall = stamp if wall is None else wall
+    accepted = s.on_odometry(x, y, 0.0, wall, stamp, stamp, frame)
+    return accepted, s.tick(stamp, wall)
+
+
+def test_nothing_is_commanded_before_the_first_valid_odometry():
+    s = session()
+    assert s.tick(0.0, 0.0) is None
+    assert feed(s, math.nan, 0.0, 0.0)[1] is None  # invalid first odometry: still nothing
+
+
+@pytest.mark.parametrize("bad, reason", [
+    (dict(x=math.nan), "not finite"), (dict(x=math.inf), "not finite"),
+    (dict(frame="map"), "in frame 'map', expected 'odom'"),
+    (dict(x=13.0), "jumped 12.00 m in one message (limit 10 m)"),
+])
+def test_invalid_odometry_stops_once_and_valid_odometry_resumes(bad, reason):
+    s = session()
+    for k in range(5):
+        _, out = feed(s, 1.0, 4.0, k * 0.001)
+        assert not out.stopped and out.v > 0.0
+    args = dict(x=1.0, y=4.0, stamp=0.005, frame="odom") | bad
+    accepted, out = feed(s, args["x"], args["y"], args["stamp"], args["frame"])
+    assert accepted and out.stopped and out.v == 0.0 and out.omega == 0.0
+    assert reason in out.report
+    np_steer = out.steer.copy()
+    _, again = feed(s, args["x"], args["y"], 0.006, args["frame"])
+    assert again.stopped and again.report is None  # reported once
+    assert (again.steer == np_steer).all()  # steering held
+    _, back = feed(s, 1.0, 4.0, 0.007)
+    assert not back.stopped and "resumed" in back.report
+
+
+def test_a_jump_is_forgiven_only_when_odometry_comes_back():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    for k in range(1, 5):
+        assert feed(s, 50.0, 4.0, k * 0.001)[1].stopped  # stays away: stays stopped
+    assert not feed(s, 1.01, 4.0, 0.005)[1].stopped
+
+
+def test_out_of_order_odometry_is_ignored():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    feed(s, 1.0, 4.0, 0.010)
+    assert s.on_odometry(2.0, 4.0, 0.0, 0.011, 0.009, 0.009, "odom") is False
+    out = s.tick(0.011, 0.011)
+    assert out.state[STATE_FIELDS.index("x")] == 1.0  # the late message was not used
+
+
+def test_a_restarted_source_starts_tracking_over():
+    s = session()
+    for k in range(3000):
+        feed(s, 1.0 + 0.0001 * k, 4.0, k * 0.001)
+    assert s.controller.outer.s_x != 0.0
+    accepted, out = feed(s, 1.0, 4.0, 0.0, wall=3.0)  # stamps back to 0: a new run
+    assert accepted and not out.stopped
+    assert out.state[T_INDEX] == 0.0
+    assert s.controller.outer.s_x == 0.0 and s.restarts == 1
+    assert "starts over" in out.report
+
+
+def test_stale_odometry_stops_and_fresh_odometry_resumes():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    out = s.tick(0.2, 0.2)  # 0.2 s of wall time without odometry, timeout 0.1 s
+    assert out.stopped and "old" in out.report
+    assert out.state[T_INDEX] == 0.0  # trajectory time of the last tracking tick
+    _, out = feed(s, 1.0, 4.0, 0.3)
+    assert not out.stopped and out.state[T_INDEX] == pytest.approx(0.3)
