@@ -23,7 +23,6 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -33,6 +32,7 @@ from nfmr_dlsmc.params import (controller_parameter_defaults, controller_params,
                                parameter_descriptions)
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.tracking_session import STATE_FIELDS, TrackingSession
+from nfmr_dlsmc.node_main import run_node
 from nfmr_dlsmc.validation import ParameterError, check_positive
 
 #: Parameters that fix the structure of a run: settable only at start.
@@ -239,24 +239,7 @@ class ControllerNode(Node):
 
 def main(args=None) -> int:
     """``ros2 run nfmr_dlsmc controller --ros-args --params-file FILE``."""
-    rclpy.init(args=args)
-    try:
-        node = ControllerNode()
-    except ParameterError as exc:
-        print(f"controller: invalid parameter: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    node.start()
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node("controller", ControllerNode, args)
 
 
 if __name__ == "__main__":

@@ -13,10 +13,8 @@ import sys
 import threading
 import time
 
-import rclpy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -25,7 +23,7 @@ from std_msgs.msg import Bool, Float64MultiArray
 
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.steering import RobotGeometry
-from nfmr_dlsmc.validation import ParameterError
+from nfmr_dlsmc.node_main import run_node
 from nfmr_sim.command_gate import CommandGate
 from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
 from nfmr_sim.ros_messages import odometry_message, time_message
@@ -143,24 +141,7 @@ class SimNode(Node):
 
 def main(args=None) -> int:
     """``ros2 run nfmr_dlsmc sim --ros-args --params-file FILE``."""
-    rclpy.init(args=args)
-    try:
-        node = SimNode()
-    except ParameterError as exc:
-        print(f"sim: invalid parameter: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    node.start()
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node("sim", SimNode, args)
 
 
 if __name__ == "__main__":

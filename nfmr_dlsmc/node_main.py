@@ -1,0 +1,62 @@
+"""The ``main`` of our node executables: start, spin, stop, and refuse bad configuration
+with one line naming the problem (exit code 2) instead of a traceback."""
+
+import sys
+
+import rclpy
+import yaml
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from nfmr_dlsmc.validation import ParameterError
+
+
+def params_files(args: list) -> list:
+    """The ``--params-file`` paths among ROS arguments."""
+    return [args[i + 1] for i, a in enumerate(args[:-1]) if a == "--params-file"]
+
+
+def check_params_file(path: str) -> str | None:
+    """Why a parameter file cannot be used (missing, unreadable, bad YAML), or None."""
+    try:
+        with open(path) as fh:
+            yaml.safe_load(fh)
+    except OSError as exc:
+        return f"cannot read parameter file {path}: {exc.strerror}"
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        return f"{path}: YAML syntax error{where}: {getattr(exc, 'problem', exc)}"
+    return None
+
+
+def run_node(prog: str, factory, args=None) -> int:
+    """Create the node with ``factory()``, call its ``start()``, spin until shutdown."""
+    argv = sys.argv if args is None else args
+    for path in params_files(list(argv)):
+        problem = check_params_file(path)
+        if problem:
+            print(f"{prog}: {problem}", file=sys.stderr)
+            return 2
+    try:
+        rclpy.init(args=args)
+    except Exception as exc:  # rclpy reports bad ROS arguments as RCLError
+        print(f"{prog}: cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}",
+              file=sys.stderr)
+        return 2
+    try:
+        node = factory()
+    except ParameterError as exc:
+        print(f"{prog}: invalid parameter: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    node.start()
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
