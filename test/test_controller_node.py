@@ -8,10 +8,9 @@ import pytest
 import rclpy
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray
 
 from nfmr_dlsmc.controller_node import ControllerNode
@@ -20,8 +19,6 @@ from nfmr_dlsmc.validation import ParameterError
 from ros_helpers import Spinner, new_context, wait_for
 
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-# /rosout keeps its latest messages for late joiners (transient local): so do we.
-ROSOUT_QOS = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class Peer(Node):
@@ -29,7 +26,7 @@ class Peer(Node):
 
     def __init__(self, context, twist_type=Twist):
         super().__init__("peer", context=context)
-        self.twists, self.steer, self.wheels, self.states, self.logs = [], [], [], [], []
+        self.twists, self.steer, self.wheels, self.states = [], [], [], []
         self.odom = self.create_publisher(Odometry, "odom", QOS)
         stamp = lambda store: (lambda m: store.append((time.monotonic(), m)))  # noqa: E731
         # One participant holds one type per topic: match the controller's cmd_vel type.
@@ -39,8 +36,6 @@ class Peer(Node):
         self.create_subscription(Float64MultiArray, "wheel_velocity_controller/commands",
                                  stamp(self.wheels), QOS)
         self.create_subscription(Float64MultiArray, "controller_state", stamp(self.states), QOS)
-        self.create_subscription(Log, "/rosout", lambda m: m.name == "controller"
-                                 and self.logs.append(m.msg), ROSOUT_QOS)
 
     def send_odom(self, x, y, yaw, t):
         msg = Odometry()
@@ -50,6 +45,24 @@ class Peer(Node):
         msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
         msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
         self.odom.publish(msg)
+
+
+class ConsoleLog:
+    """The node's log lines as printed on the console (stderr), gathered as they come."""
+
+    def __init__(self, capfd):
+        self.capfd = capfd
+        self.lines = []
+
+    def read(self) -> list:
+        self.lines += [line for line in self.capfd.readouterr().err.splitlines()
+                       if "[controller]" in line]
+        return self.lines
+
+
+@pytest.fixture
+def log(capfd):
+    return ConsoleLog(capfd)
 
 
 @pytest.fixture
@@ -108,7 +121,7 @@ def test_nothing_moves_before_the_first_odometry(setup):
     assert peer.twists == [] and peer.wheels == []
 
 
-def test_stale_odometry_stops_within_50_ms_and_recovery_resumes(setup):
+def test_stale_odometry_stops_within_50_ms_and_recovery_resumes(setup, log):
     node, peer = setup(odom_timeout=0.1)
     drive(peer, 20)
     last_odom = time.monotonic()
@@ -118,16 +131,16 @@ def test_stale_odometry_stops_within_50_ms_and_recovery_resumes(setup):
     assert stop_time - (last_odom + 0.1) < 0.05
     stop_index = next(i for i, (_, w) in enumerate(peer.wheels) if not any(w.data))
     np.testing.assert_allclose(peer.steer[stop_index][1].data, peer.steer[stop_index - 1][1].data)
-    wait_for(lambda: any("odometry is" in m and "old" in m for m in peer.logs), what="the log")
+    wait_for(lambda: any("odometry is" in m and "old" in m for m in log.read()), what="the log")
     n = len(peer.twists)
     drive(peer, 5, start_t=1.0)
     wait_for(lambda: len(peer.twists) >= n + 5)
     assert peer.twists[-1][1].linear.x > 0.0
-    wait_for(lambda: any("resumed" in m for m in peer.logs), what="resume log")
-    assert sum("old" in m for m in peer.logs) == 1
+    wait_for(lambda: any("resumed" in m for m in log.read()), what="resume log")
+    assert sum("old" in m for m in log.read()) == 1
 
 
-def test_nan_odometry_stops_at_once(setup):
+def test_nan_odometry_stops_at_once(setup, log):
     node, peer = setup()
     drive(peer, 10)
     n = len(peer.twists)
@@ -137,7 +150,7 @@ def test_nan_odometry_stops_at_once(setup):
     arrival, twist = peer.twists[n]
     assert twist.linear.x == 0.0 and twist.angular.z == 0.0
     assert arrival - sent < 0.05
-    wait_for(lambda: any("not finite" in m for m in peer.logs), what="the log")
+    wait_for(lambda: any("not finite" in m for m in log.read()), what="the log")
 
 
 def test_live_gain_change_takes_effect_at_the_next_tick(setup):
@@ -214,3 +227,37 @@ def test_clock_mode_ticks_at_the_control_rate(setup):
     time.sleep(0.5)
     rate = (len(peer.states) - n0) / 0.5
     assert 800.0 < rate < 1100.0
+
+
+def send_odom_in(peer, frame, x, t):
+    msg = Odometry()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = int(t), int(round((t - int(t)) * 1e9))
+    msg.header.frame_id = frame
+    msg.pose.pose.position.x, msg.pose.pose.position.y = x, 4.0
+    msg.pose.pose.orientation.w = 1.0
+    peer.odom.publish(msg)
+
+
+@pytest.mark.parametrize("frame, x, reason", [
+    ("map", 1.0, "in frame 'map'"), ("odom", 40.0, "jumped 39.00 m")])
+def test_wrong_frame_and_jumps_stop_the_robot_over_dds(setup, log, frame, x, reason):
+    node, peer = setup()
+    drive(peer, 5)
+    n = len(peer.twists)
+    send_odom_in(peer, frame, x, 0.005)
+    wait_for(lambda: len(peer.twists) > n, what="a reply")
+    assert peer.twists[n][1].linear.x == 0.0
+    wait_for(lambda: any(reason in m for m in log.read()), what="the log")
+
+
+def test_a_restarted_odometry_source_starts_tracking_over(setup):
+    node, peer = setup()
+    drive(peer, 1500)  # 1.5 s of odometry
+    labels = peer.states[0][1].layout.dim[0].label.split(",")
+    assert dict(zip(labels, peer.states[-1][1].data))["t"] == pytest.approx(1.499)
+    n = len(peer.states)
+    drive(peer, 3)  # the source starts again at stamp 0
+    restarted = [dict(zip(labels, m.data)) for _, m in peer.states[n:]]
+    assert [round(s["t"], 6) for s in restarted] == [0.0, 0.001, 0.002]
+    assert all(s["stopped"] == 0.0 for s in restarted)
+    assert node.session.restarts == 1
