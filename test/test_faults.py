@@ -1,0 +1,160 @@
+"""Faults of the running system, with real processes started and stopped by the test."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+import rclpy
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosbags.rosbag2 import Reader
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Float64MultiArray
+
+from nfmr_dlsmc.bag_reader import read_bag
+from ros_helpers import Spinner, new_context, wait_for
+from test_run import children_of, cmdline, start_run
+
+pytestmark = pytest.mark.slow
+ANALYZE = str(Path(sys.executable).parent / "nfmr-analyze")
+
+
+def wait_for_child(proc, marker, timeout=60.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for pid in children_of(proc.pid):
+            if marker in cmdline(pid):
+                return pid
+        time.sleep(0.1)
+    raise AssertionError(f"no child running {marker}")
+
+
+def run_dir_of(stderr_first_line: str) -> Path:
+    return Path(stderr_first_line.split("run folder ", 1)[1].strip())
+
+
+def test_killed_sim_stops_the_robot_and_the_run(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60")
+    try:
+        sim = wait_for_child(proc, "nfmr_sim.sim_node")
+        wait_for_child(proc, "nfmr_dlsmc.controller_node")
+        time.sleep(4.0)
+        killed_at = time.monotonic()
+        os.kill(sim, signal.SIGKILL)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 1
+    assert "sim exited with code -9" in stderr and "sim.log" in stderr
+    assert time.monotonic() - killed_at < 30
+    bag = Path(stdout.strip().splitlines()[-1])
+    with Reader(bag) as reader:
+        assert reader.message_count > 0
+    controller_log = (bag.parent / "controller.log").read_text()
+    assert controller_log.count("stopping the robot: odometry is") == 1
+    assert "Traceback" not in controller_log
+    # After the sim died the controller kept running and commanded zero speed.
+    states = read_bag(bag, topics=["/controller_state"]).of("/controller_state")
+    from rclpy.serialization import deserialize_message
+    last = deserialize_message(states[-1].data, Float64MultiArray)
+    labels = last.layout.dim[0].label.split(",")
+    values = dict(zip(labels, last.data))
+    assert values["stopped"] == 1.0 and values["v"] == 0.0
+
+
+def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60")
+    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
+            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
+    time.sleep(3.0)
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    stdout, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 130
+    assert all(not Path(f"/proc/{pid}").exists() for pid in kids)
+    assert time.monotonic() - sent < 15  # children within 5 s each, then the bag is closed
+    with Reader(Path(stdout.strip().splitlines()[-1])) as reader:
+        assert reader.message_count > 0
+
+
+def test_killed_recorder_leaves_a_bag_readable_up_to_its_last_chunk(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60")
+    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
+            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
+    time.sleep(6.0)
+    proc.kill()  # SIGKILL: the recorder (in the launcher) dies without finishing the bag
+    proc.wait(timeout=10)
+    wait_for(lambda: all(not Path(f"/proc/{pid}").exists() for pid in kids), timeout=10,
+             what="children gone with the launcher")
+    bag = next(tmp_path.glob("*/bag"))
+    assert not (bag / "metadata.yaml").exists()
+    result = subprocess.run([ANALYZE, str(bag), "--json"], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0, result.stderr
+    warning = next(line for line in result.stderr.splitlines() if "truncated" in line)
+    assert "lost" in warning
+    contents = read_bag(bag)
+    assert contents.truncated and contents.messages
+    # At most one chunk (1 MiB of messages, under a second of a run) is lost.
+    span = (contents.messages[-1].log_time - contents.messages[0].log_time) * 1e-9
+    assert span > 1.0
+    assert contents.unread_bytes < 1 << 20
+
+
+def test_a_command_flood_does_not_slow_the_realtime_sim():
+    context = new_context()
+    sim_proc = subprocess.Popen([str(Path(sys.executable).parent / "sim"), "--ros-args", "-p",
+                                 "mode:=realtime"], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+    node = Node("flooder", context=context)
+    clocks = []
+    node.create_subscription(Clock, "/clock", lambda m: clocks.append(
+        (time.monotonic(), m.clock.sec + m.clock.nanosec * 1e-9)), 10)
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    steer = node.create_publisher(Float64MultiArray, "steer_position_controller/commands", qos)
+    wheels = node.create_publisher(Float64MultiArray, "wheel_velocity_controller/commands", qos)
+    spinner = Spinner(context, node)
+    stop = threading.Event()
+    sent = [0]
+
+    def flood():
+        period = 1e-4  # 10 kHz
+        next_t = time.monotonic()
+        while not stop.is_set():
+            steer.publish(Float64MultiArray(data=[0.0] * 4))
+            wheels.publish(Float64MultiArray(data=[3.0] * 4))
+            sent[0] += 1
+            next_t += period
+            delay = next_t - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+
+    try:
+        wait_for(lambda: len(clocks) > 100, timeout=60, what="the sim running")
+        flooder = threading.Thread(target=flood, daemon=True)
+        flooder.start()
+        time.sleep(1.0)
+        start = clocks[-1]
+        time.sleep(3.0)
+        end = clocks[-1]
+        stop.set()
+        flooder.join()
+        rate = (end[1] - start[1]) / (end[0] - start[0])  # sim seconds per wall second
+        flood_rate = sent[0] / 4.0
+        assert flood_rate > 3000  # the flood really was heavy
+        assert rate > 0.9
+    finally:
+        stop.set()
+        spinner.close()
+        node.destroy_node()
+        context.try_shutdown()
+        sim_proc.send_signal(signal.SIGINT)
+        sim_proc.wait(timeout=10)
+
