@@ -9,9 +9,7 @@ import time
 from pathlib import Path
 
 import pytest
-import rclpy
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
@@ -157,4 +155,5 @@ def test_a_command_flood_does_not_slow_the_realtime_sim():
         context.try_shutdown()
         sim_proc.send_signal(signal.SIGINT)
         sim_proc.wait(timeout=10)
+
 
