@@ -32,7 +32,7 @@ from nfmr_dlsmc.params import (controller_parameter_defaults, controller_params,
                                parameter_descriptions)
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.tracking_session import STATE_FIELDS, TrackingSession
-from nfmr_dlsmc.node_main import run_node
+from nfmr_dlsmc.node_main import LoopThread, run_node
 from nfmr_dlsmc.validation import ParameterError, check_positive
 
 #: Parameters that fix the structure of a run: settable only at start.
@@ -87,8 +87,7 @@ class ControllerNode(Node):
         self._stats = LoopStats(overrun_threshold=2.0 * params.dlsmc.dt)
         self._state_layout = [MultiArrayDimension(label=",".join(STATE_FIELDS),
                                                   size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
-        self._running = threading.Event()
-        self._thread = None
+        self._loop = LoopThread(self._clock_loop, "dlsmc-1khz")
         self.create_timer(values["watchdog_period"], self._watchdog)
         self.create_timer(1.0, self._publish_diagnostics)
         self.ticks = 0
@@ -171,32 +170,26 @@ class ControllerNode(Node):
 
     def start(self) -> None:
         """Start the clock-driven loop thread (``tick_source: clock`` only)."""
-        if self._values["tick_source"] != "clock":
-            return
-        self._running.set()
-        self._thread = threading.Thread(target=self._clock_loop, name="dlsmc-1khz", daemon=True)
-        self._thread.start()
+        if self._values["tick_source"] == "clock":
+            self._loop.start()
 
     def stop(self) -> None:
         """Stop the loop thread (idempotent)."""
-        self._running.clear()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-            self._thread = None
+        self._loop.stop()
 
     def _clock_loop(self) -> None:
         period = self.session.params.dlsmc.dt
         clock = self.get_clock()
         if clock.ros_time_is_active:
             next_time = self._now()
-            while self._running.is_set():
+            while self._loop.running.is_set():
                 next_time += period
                 clock.sleep_until(rclpy.time.Time(nanoseconds=int(round(next_time * 1e9)),
                                                   clock_type=clock.clock_type))
                 self._tick(self._now())
             return
         deadline = time.monotonic()
-        while self._running.is_set():
+        while self._loop.running.is_set():
             deadline += period
             delay = deadline - time.monotonic()
             if delay > 0.0:

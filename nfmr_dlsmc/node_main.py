@@ -2,6 +2,7 @@
 with one line naming the problem (exit code 2) instead of a traceback."""
 
 import sys
+import threading
 
 import rclpy
 import yaml
@@ -60,3 +61,26 @@ def run_node(prog: str, factory, args=None) -> int:
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+class LoopThread:
+    """A node's background loop: ``target`` runs in a daemon thread while ``running`` is set."""
+
+    def __init__(self, target, name: str):
+        self._target = target
+        self._name = name
+        self.running = threading.Event()
+        self._thread = None
+
+    def start(self) -> None:
+        """Start the loop thread."""
+        self.running.set()
+        self._thread = threading.Thread(target=self._target, name=self._name, daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Ask the loop to end and wait for it (idempotent)."""
+        self.running.clear()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+            self._thread = None

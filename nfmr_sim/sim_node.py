@@ -10,7 +10,6 @@ commands brake the wheels; the reason is logged once.
 """
 
 import sys
-import threading
 import time
 
 from geometry_msgs.msg import Twist
@@ -23,7 +22,7 @@ from std_msgs.msg import Bool, Float64MultiArray
 
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.steering import RobotGeometry
-from nfmr_dlsmc.node_main import run_node
+from nfmr_dlsmc.node_main import LoopThread, run_node
 from nfmr_sim.command_gate import CommandGate
 from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
 from nfmr_sim.ros_messages import odometry_message, time_message
@@ -59,8 +58,7 @@ class SimNode(Node):
                                  lambda m: self.gate.offer_wheels(m.data, self.world.time),
                                  reliable)
         self.create_subscription(Twist, "cmd_vel", self._on_twist, reliable)
-        self._running = threading.Event()
-        self._thread = None
+        self._stepper = LoopThread(self._loop, "sim-step")
         self.steps = 0
 
     def _on_twist(self, msg: Twist) -> None:
@@ -70,30 +68,25 @@ class SimNode(Node):
 
     def start(self) -> None:
         """Start stepping in a background thread."""
-        self._running.set()
-        self._thread = threading.Thread(target=self._loop, name="sim-step", daemon=True)
-        self._thread.start()
+        self._stepper.start()
 
     def stop(self) -> None:
         """Stop stepping and wait for the thread (idempotent)."""
-        self._running.clear()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-            self._thread = None
+        self._stepper.stop()
 
     def _loop(self) -> None:
         s = self.settings
         dt = s.world.physics_dt
         if s.start_after_subscribers:
             self.get_logger().info(f"waiting for {s.start_after_subscribers} odom subscribers")
-            while self._running.is_set() and (
+            while self._stepper.running.is_set() and (
                     self.count_subscribers("odom") < s.start_after_subscribers):
                 time.sleep(0.01)
             time.sleep(0.2)  # let the matched readers settle before the first message
         out = self.world.observe()
         self._publish(out, aux=True)
         start = time.monotonic()
-        while self._running.is_set():
+        while self._stepper.running.is_set():
             if s.mode == "lockstep":
                 self.gate.wait_for_step_command(s.lockstep_timeout)
             else:
