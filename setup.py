@@ -17,6 +17,7 @@ setup(
     install_requires=[
         "numpy>=1.26,<3",
         "matplotlib>=3.7,<4",
+        "scipy>=1.11,<2",
         "pyyaml>=6,<7",
         "pybullet>=3.2.6,<4",
         "mcap>=1.2,<2",
@@ -42,6 +43,7 @@ setup(
             "nfmr-run = nfmr_dlsmc.launcher:main",
             "nfmr-analyze = nfmr_dlsmc.analyze_cli:main",
             "nfmr-replay = nfmr_dlsmc.replay_cli:main",
+            "nfmr-montecarlo = nfmr_dlsmc.montecarlo_cli:main",
         ],
     },
 )
