@@ -33,7 +33,7 @@ test: setup
 	$(BIN)/python -m pytest -q
 
 bench: setup
-	$(BIN)/python -m nfmr_dlsmc.benchmarks
+	$(BIN)/nfmr-bench --nodes
 
 clean:
 	rm -rf $(VENV) build *.egg-info

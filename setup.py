@@ -44,6 +44,7 @@ setup(
             "nfmr-analyze = nfmr_dlsmc.analyze_cli:main",
             "nfmr-replay = nfmr_dlsmc.replay_cli:main",
             "nfmr-montecarlo = nfmr_dlsmc.montecarlo_cli:main",
+            "nfmr-bench = nfmr_dlsmc.benchmarks:main",
         ],
     },
 )

@@ -4,12 +4,18 @@
   Case 1 (100 000 steps, full telemetry recorded), best of ``--repeat`` runs of CPU time;
 - DLSMC compute per tick: p50 / p99 in microseconds over the same run;
 - pybullet chassis world under a constant command (what a lockstep step costs apart from
-  waiting for the command): real-time factor and microseconds per physics step.
+  waiting for the command): real-time factor and microseconds per physics step;
+- pybullet closed loop, lockstep in one process (world + controller session per step);
+- batch kinematic closed loop: robot-steps per second for 500 robots;
+- with ``--nodes``: the controller node's 1 kHz loop against a plain rclpy 1 ms timer,
+  odometry -> command latency across processes, resident memory, bag writer throughput.
 """
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -64,13 +70,58 @@ def sim_world_rtf(sim_seconds: float) -> dict:
             "us_per_step": wall / steps * 1e6}
 
 
+def pybullet_closed_loop_rtf(sim_seconds: float) -> dict:
+    """The DLSMC driving the pybullet chassis step by step in one process (paper Case 1)."""
+    from nfmr_dlsmc.params import controller_params, load_params_file
+    from nfmr_dlsmc.tracking_session import TrackingSession
+    from nfmr_sim.sim_params import sim_settings
+    from nfmr_sim.world import ChassisWorld
+
+    config = Path(__file__).resolve().parents[1] / "config" / "paper_case1.yaml"
+    if not config.exists():
+        config = Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "paper_case1.yaml"
+    params = controller_params(load_params_file(config))
+    settings = sim_settings(load_params_file(config, "sim"))
+    session = TrackingSession(params, odom_timeout=1e9)
+    steps = int(round(sim_seconds / settings.world.physics_dt))
+    with ChassisWorld(settings.world) as world:
+        world.reset(settings.initial_pose)
+        out = world.observe()
+        start = time.perf_counter()
+        for _ in range(steps):
+            p = out.odometry
+            session.on_odometry(p.x, p.y, p.yaw, 0.0, out.time)
+            tick = session.tick(out.time, 0.0)
+            world.set_wheel_commands(tick.steer, tick.wheel_speed)
+            out = world.step()
+        wall = time.perf_counter() - start
+    return {"sim_s": sim_seconds, "real_time_factor": sim_seconds / wall}
+
+
+def batch_robot_steps(n: int = 500, seconds: float = 10.0) -> dict:
+    """Robot-steps per second of the vectorised batch simulator."""
+    from nfmr_dlsmc.batch_sim import simulate_batch
+    from nfmr_dlsmc.gains import DlsmcConfig
+
+    rng = np.random.default_rng(0)
+    starts = rng.uniform(-5.0, 5.0, (n, 3))
+    start = time.perf_counter()
+    simulate_batch(DlsmcConfig(), make_trajectory("sine"), starts, seconds)
+    wall = time.perf_counter() - start
+    return {"robots": n, "robot_steps_per_s": n * seconds / 0.001 / wall}
+
+
 def main(argv=None) -> int:
     """Run the benchmarks, print a table and optionally write JSON."""
-    parser = argparse.ArgumentParser(prog="python -m nfmr_dlsmc.benchmarks")
+    parser = argparse.ArgumentParser(prog="nfmr-bench", description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--json", metavar="FILE")
     parser.add_argument("--sim-seconds", type=float, default=20.0,
-                        help="simulated time of the pybullet figure [s]")
+                        help="simulated time of the pybullet figures [s]")
+    parser.add_argument("--nodes", action="store_true",
+                        help="also measure the running nodes (takes --seconds and more)")
+    parser.add_argument("--seconds", type=float, default=60.0,
+                        help="how long the node loops run with --nodes [s] (default 60)")
     args = parser.parse_args(argv)
     print("kinematic closed loop (paper Case 1, 100 000 steps) ...", flush=True)
     kin = kinematic_steps_per_second(args.repeat)
@@ -78,6 +129,16 @@ def main(argv=None) -> int:
     tick = controller_tick_us()
     print(f"pybullet chassis world, {args.sim_seconds:g} s ...", flush=True)
     world = sim_world_rtf(args.sim_seconds)
+    print("pybullet closed loop (lockstep, one process) ...", flush=True)
+    closed = pybullet_closed_loop_rtf(args.sim_seconds)
+    print("batch kinematic closed loop, 500 robots ...", flush=True)
+    batch = batch_robot_steps()
+    nodes = None
+    if args.nodes:
+        from nfmr_dlsmc.bench_ros import bag_writer_throughput, node_figures
+        print(f"controller node loop, {args.seconds:g} s, and a plain rclpy timer ...", flush=True)
+        nodes = node_figures(args.seconds)
+        nodes["bag_writer"] = bag_writer_throughput()
     print(f"{'figure':<44} {'value':>12}  target")
     print(f"{'kinematic closed loop [steps/s]':<44} {kin['steps_per_s']:>12,.0f}  >= 300,000")
     print(f"{'100 s paper case, best CPU [s]':<44} {kin['cpu_s_best']:>12.3f}  < 1")
@@ -85,9 +146,29 @@ def main(argv=None) -> int:
     print(f"{'DLSMC compute per tick p99 [us]':<44} {tick['p99_us']:>12.2f}")
     print(f"{'pybullet world real-time factor [-]':<44} {world['real_time_factor']:>12.1f}  >= 5")
     print(f"{'pybullet world per physics step [us]':<44} {world['us_per_step']:>12.1f}")
+    print(f"{'pybullet closed loop real-time factor [-]':<44} {closed['real_time_factor']:>12.1f}  >= 5")
+    print(f"{'batch kinematic [robot-steps/s]':<44} {batch['robot_steps_per_s']:>12,.0f}  >= 10,000,000")
+    if nodes:
+        loop, plain = nodes["controller_loop"], nodes["plain_rclpy_timer"]
+        lat = nodes["odom_to_command_latency"]
+        for label, key, fmt, target in (
+                ("mean rate [Hz]", "mean_rate_hz", ".1f", ">= 999.5"),
+                ("period p50 [ms]", "period_p50_ms", ".3f", ""),
+                ("period p99 [ms]", "period_p99_ms", ".3f", "<= 1.1"),
+                ("period max [ms]", "period_max_ms", ".2f", ""),
+                ("overruns > 2 ms", "overruns_2ms", "d", "")):
+            print(f"{'1 kHz loop ' + label:<44} {loop[key]:>12{fmt}}  {target:<12} "
+                  f"plain rclpy timer {plain[key]:{fmt}}")
+        print(f"{'1 kHz loop compute p99 [us]':<44} {loop['compute_p99_us']:>12.1f}")
+        print(f"{'odom -> command latency p50 [ms]':<44} {lat['p50_ms']:>12.3f}")
+        print(f"{'odom -> command latency p99 [ms]':<44} {lat['p99_ms']:>12.3f}  <= 1")
+        print(f"{'bag writer [messages/s]':<44} {nodes['bag_writer']['messages_per_s']:>12,.0f}")
+        for name, mb in nodes["rss_mb"].items():
+            print(f"{'resident memory ' + name + ' [MB]':<44} {mb:>12.1f}")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"kinematic_scalar": kin, "dlsmc_tick": tick, "sim_world": world},
+            json.dump({"kinematic_scalar": kin, "dlsmc_tick": tick, "sim_world": world,
+                       "pybullet_closed_loop": closed, "batch": batch, "nodes": nodes},
                       fh, indent=2)
     return 0
 
