@@ -157,3 +157,73 @@ def test_a_command_flood_does_not_slow_the_realtime_sim():
         sim_proc.wait(timeout=10)
 
 
+
+
+def _sh(*command):
+    return subprocess.run(list(command), capture_output=True, text=True, timeout=30)
+
+
+@pytest.fixture(params=["5ms", None], ids=["netem-5ms", "no-delay"])
+def two_hosts(request):
+    """Two network namespaces (our own test hosts) joined by a veth pair, with netem delay
+    on both ends (or none); removed afterwards."""
+    delay = request.param
+    tag = f"{os.getpid() % 100000}"
+    a, b, va, vb = f"nfmr_a{tag}", f"nfmr_b{tag}", f"nfa{tag}", f"nfb{tag}"
+    made = _sh("ip", "netns", "add", a)
+    if made.returncode != 0:
+        pytest.skip(f"cannot create network namespaces here: {made.stderr.strip()}")
+    try:
+        commands = [("ip", "netns", "add", b),
+                    ("ip", "link", "add", va, "type", "veth", "peer", "name", vb),
+                    ("ip", "link", "set", va, "netns", a), ("ip", "link", "set", vb, "netns", b),
+                    ("ip", "-n", a, "addr", "add", "10.213.7.1/24", "dev", va),
+                    ("ip", "-n", b, "addr", "add", "10.213.7.2/24", "dev", vb)]
+        for ns, dev in ((a, va), (b, vb)):
+            commands += [("ip", "-n", ns, "link", "set", dev, "up"),
+                         ("ip", "-n", ns, "link", "set", "lo", "up"),
+                         # DDS discovery is multicast: route it over the link.
+                         ("ip", "-n", ns, "route", "add", "224.0.0.0/4", "dev", dev)]
+        for command in commands:
+            result = _sh(*command)
+            assert result.returncode == 0, f"{' '.join(command)}: {result.stderr}"
+        if delay:
+            for ns, dev in ((a, va), (b, vb)):
+                result = _sh("ip", "netns", "exec", ns, "tc", "qdisc", "add", "dev", dev,
+                             "root", "netem", "delay", delay)
+                if result.returncode != 0:
+                    pytest.skip(f"netem is not available on this kernel: {result.stderr.strip()}")
+        yield a, b
+    finally:
+        _sh("ip", "netns", "del", a)
+        _sh("ip", "netns", "del", b)
+
+
+def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
+    a, b = two_hosts
+    config = str(Path(__file__).parents[1] / "config" / "paper_case1.yaml")
+    # UDP only: Fast DDS would otherwise move the data through shared memory (same host).
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="SUBNET",
+               FASTDDS_BUILTIN_TRANSPORTS="UDPv4")
+    bin_dir = Path(sys.executable).parent
+    procs = [subprocess.Popen(["ip", "netns", "exec", a, str(bin_dir / "sim"), "--ros-args",
+                               "--params-file", config, "-p", "start_after_subscribers:=1"],
+                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+             subprocess.Popen(["ip", "netns", "exec", b, str(bin_dir / "controller"),
+                               "--ros-args", "--params-file", config],
+                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        listener = subprocess.run(
+            ["ip", "netns", "exec", b, sys.executable,
+             str(Path(__file__).parent / "netns_listener.py"), "9.0"],
+            env=env, capture_output=True, text=True, timeout=300)
+    finally:
+        for proc in procs:
+            proc.send_signal(signal.SIGINT)
+        for proc in procs:
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+    line = listener.stdout.strip().splitlines()[-1]
+    assert float(line.split("distance=")[1]) < 0.15, line  # back on the trajectory
