@@ -227,3 +227,53 @@ def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
                 proc.kill()
     line = listener.stdout.strip().splitlines()[-1]
     assert float(line.split("distance=")[1]) < 0.15, line  # back on the trajectory
+
+
+def test_a_restarted_sim_is_tracked_again(tmp_path):
+    """Kill the sim mid-run and start a new one: the controller process starts over."""
+    config = str(Path(__file__).parents[1] / "config" / "paper_case1.yaml")
+    bin_dir = Path(sys.executable).parent
+    context = new_context()
+    listener = Node("restart_listener", context=context)
+    states = []
+    listener.create_subscription(
+        Float64MultiArray, "controller_state",
+        lambda m: states.append(dict(zip(m.layout.dim[0].label.split(","), m.data))),
+        QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    spinner = Spinner(context, listener)
+
+    def start_sim():
+        return subprocess.Popen([str(bin_dir / "sim"), "--ros-args", "--params-file", config,
+                                 "-p", "start_after_subscribers:=1"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    controller = subprocess.Popen([str(bin_dir / "controller"), "--ros-args", "--params-file",
+                                   config], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                  text=True)
+    sim = start_sim()
+    try:
+        wait_for(lambda: states and states[-1]["t"] > 2.0, timeout=60, what="first run at 2 s")
+        sim.send_signal(signal.SIGINT)
+        sim.wait(timeout=10)
+        wait_for(lambda: states[-1]["stopped"] == 1.0, timeout=10, what="a safety stop")
+        n = len(states)
+        sim = start_sim()
+        wait_for(lambda: any(s["stopped"] == 0.0 for s in states[n:]) and
+                 states[-1]["t"] > 1.0, timeout=60, what="tracking again")
+        again = [s for s in states[n:] if s["stopped"] == 0.0]
+        assert again[0]["t"] == pytest.approx(0.0, abs=0.002)  # trajectory time from 0
+        assert controller.poll() is None  # the controller kept running throughout
+    finally:
+        for proc in (sim, controller):
+            proc.send_signal(signal.SIGINT)
+        for proc in (sim, controller):
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+        spinner.close()
+        listener.destroy_node()
+        context.try_shutdown()
+    log = controller.stdout.read()
+    assert log.count("stopping the robot: odometry is") == 1
+    assert "tracking starts over" in log
