@@ -49,10 +49,19 @@ def _sig_pow(s, r):
     return np.sign(s) * np.abs(s) ** r
 
 
+#: Outer-loop gains that may differ per robot (see ``outer`` of :func:`simulate_batch`).
+PER_ROBOT_GAINS = ("C1", "C2", "k2", "xi")
+
+
 def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
-                   disturbance=None, record: bool = False) -> BatchResult:
+                   disturbance=None, record: bool = False, outer=None) -> BatchResult:
     """Simulate N robots from the starts ``x0`` (N, 3) [m, m, rad] for ``duration`` [s]
-    at the configured period; ``disturbance`` is a yaw-rate profile as for ``simulate``."""
+    at the configured period; ``disturbance`` is a yaw-rate profile as for ``simulate``.
+
+    ``outer`` optionally maps names of :data:`PER_ROBOT_GAINS` to arrays of length N, one
+    value per robot (each must satisfy its OuterLoopGains rule), so that many gain sets are
+    evaluated in one batch.
+    """
     x0 = np.atleast_2d(np.asarray(x0, dtype=float))
     if x0.ndim != 2 or x0.shape[1] != 3:
         raise ParameterError("x0", x0.shape, "must have shape (N, 3): x [m], y [m], theta [rad]")
@@ -62,6 +71,16 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     dt = config.dt
     n_steps = int(round(duration / dt))
     o, i, lim = config.outer, config.inner, config.limits
+    gain = {name: np.full(len(x0), float(getattr(o, name))) for name in PER_ROBOT_GAINS}
+    for name, values in (outer or {}).items():
+        if name not in PER_ROBOT_GAINS:
+            raise ParameterError(f"outer.{name}", "per robot",
+                                 f"only {', '.join(PER_ROBOT_GAINS)} may differ per robot")
+        values = np.broadcast_to(np.asarray(values, dtype=float), (len(x0),))
+        if not np.all(np.isfinite(values) & (values > 0.0)):
+            raise ParameterError(f"outer.{name}", "per robot", "every value must be > 0")
+        gain[name] = values.copy()
+    C1, C2, k2, xi = gain["C1"], gain["C2"], gain["k2"], gain["xi"]
     r2, r3, r1 = o.q2 / o.p2, o.q3 / o.p3, i.q1 / i.p1
     t = np.arange(n_steps) * dt
     ref = [np.broadcast_to(np.asarray(c, dtype=float), t.shape) for c in trajectory.sample(t)]
@@ -83,8 +102,8 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
 
     def bounded_rate(e):
         a = np.abs(e)
-        inside = np.sin(0.5 * math.pi * (np.minimum(a, o.xi) / o.xi) ** r2)
-        return np.sign(e) * np.where(a > o.xi, 1.0, inside)
+        inside = np.sin(0.5 * math.pi * (np.minimum(a, xi) / xi) ** r2)
+        return np.sign(e) * np.where(a > xi, 1.0, inside)
 
     for k in range(n_steps):
         x_d, y_d, xdot_d, ydot_d = ref[0][k], ref[1][k], ref[2][k], ref[3][k]
@@ -98,10 +117,10 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
             int_ax += alpha_x * dt
             int_ay += alpha_y * dt
         alpha_x, alpha_y = bounded_rate(x_e), bounded_rate(y_e)
-        s_x = x_e - ex0 + o.C1 * int_ax
-        s_y = y_e - ey0 + o.C2 * int_ay
-        u_x = xdot_d - o.k2 * np.abs(s_x) ** r3 * erf(o.h * s_x) - o.C1 * alpha_x
-        u_y = ydot_d - o.k2 * np.abs(s_y) ** r3 * erf(o.h * s_y) - o.C2 * alpha_y
+        s_x = x_e - ex0 + C1 * int_ax
+        s_y = y_e - ey0 + C2 * int_ay
+        u_x = xdot_d - k2 * np.abs(s_x) ** r3 * erf(o.h * s_x) - C1 * alpha_x
+        u_y = ydot_d - k2 * np.abs(s_y) ** r3 * erf(o.h * s_y) - C2 * alpha_y
         theta_d = np.arctan2(u_y, u_x)
         if k > 0:
             raw = wrap_angles(theta_d - theta_d_prev) / dt

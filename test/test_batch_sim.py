@@ -71,3 +71,21 @@ def test_montecarlo_reports_success_rate_and_plots(tmp_path):
     bad = subprocess.run([str(exe), "--x0-range", "1,2"], capture_output=True, text=True,
                          timeout=60)
     assert bad.returncode == 2 and "--x0-range" in bad.stderr
+
+
+def test_per_robot_gains_equal_separate_runs():
+    from nfmr_dlsmc.gains import OuterLoopGains
+
+    gains = {"C1": [0.6, 0.9], "C2": [0.6, 0.4], "k2": [1.0, 0.5], "xi": [0.5, 1.0]}
+    start = [[1.0, 4.0, 0.0]] * 2
+    together = simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 15.0, outer=gains)
+    for k in range(2):
+        alone = simulate_batch(DlsmcConfig(outer=OuterLoopGains(
+            **{name: values[k] for name, values in gains.items()})),
+            make_trajectory("sine"), start[:1], 15.0)
+        assert together.iae[k] == alone.iae[0] and together.t_conv[k] == alone.t_conv[0]
+    assert together.iae[0] != together.iae[1]
+    with pytest.raises(ParameterError, match="outer.C1"):
+        simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 1.0, outer={"C1": [1, -1]})
+    with pytest.raises(ParameterError, match="outer.h"):
+        simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 1.0, outer={"h": [1, 1]})
