@@ -45,6 +45,7 @@ setup(
             "nfmr-replay = nfmr_dlsmc.replay_cli:main",
             "nfmr-montecarlo = nfmr_dlsmc.montecarlo_cli:main",
             "nfmr-bench = nfmr_dlsmc.benchmarks:main",
+            "nfmr-tune = nfmr_dlsmc.tune_cli:main",
         ],
     },
 )

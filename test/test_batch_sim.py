@@ -89,3 +89,32 @@ def test_per_robot_gains_equal_separate_runs():
         simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 1.0, outer={"C1": [1, -1]})
     with pytest.raises(ParameterError, match="outer.h"):
         simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 1.0, outer={"h": [1, 1]})
+
+
+def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path):
+    out = tmp_path / "tuned.yaml"
+    bin_dir = Path(sys.executable).parent
+    proc = subprocess.run([str(bin_dir / "nfmr-tune"), "--candidates", "24", "--finalists", "3",
+                           "--screen-starts", "8", "--n", "16", "--duration", "30", "--seed", "2",
+                           "--out", str(out), "--json"], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert report["case1_t_conv_tuned"] <= report["case1_t_conv_paper_gains"]
+    assert report["case1_t_conv_paper_gains"] == pytest.approx(7.009, abs=2e-3)
+    assert report["max_v"] <= 2.0 and report["max_abs_omega"] <= 1.59
+    # The written file drives the scalar simulator to the same convergence time.
+    run = subprocess.run([str(bin_dir / "nfmr-eval"), "--params", str(out), "--duration", "30",
+                          "--json"], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    scalar = json.loads(run.stdout.strip().splitlines()[-1])
+    assert scalar["t_conv"] == pytest.approx(report["case1_t_conv_tuned"], abs=2e-3)
+
+
+def test_shipped_tuned_gains_beat_the_paper_on_case1(request):
+    path = request.config.rootpath / "config" / "tuned_outer.yaml"
+    proc = subprocess.run([str(Path(sys.executable).parent / "nfmr-eval"), "--params", str(path),
+                           "--json"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["t_conv"] < 5.0 and result["max_v"] <= 2.0
