@@ -17,24 +17,10 @@ from std_msgs.msg import Float64MultiArray
 
 from nfmr_dlsmc.bag_reader import read_bag
 from ros_helpers import Spinner, new_context, wait_for
-from test_run import children_of, cmdline, start_run
+from test_run import start_run, wait_for_child
 
 pytestmark = pytest.mark.slow
 ANALYZE = str(Path(sys.executable).parent / "nfmr-analyze")
-
-
-def wait_for_child(proc, marker, timeout=60.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        for pid in children_of(proc.pid):
-            if marker in cmdline(pid):
-                return pid
-        time.sleep(0.1)
-    raise AssertionError(f"no child running {marker}")
-
-
-def run_dir_of(stderr_first_line: str) -> Path:
-    return Path(stderr_first_line.split("run folder ", 1)[1].strip())
 
 
 def test_killed_sim_stops_the_robot_and_the_run(tmp_path):

@@ -38,6 +38,17 @@ def cmdline(pid):
         return ""
 
 
+def wait_for_child(proc, marker, timeout=60.0):
+    """The pid of the child of ``proc`` whose command line contains ``marker``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for pid in children_of(proc.pid):
+            if marker in cmdline(pid):
+                return pid
+        time.sleep(0.1)
+    raise AssertionError(f"no child running {marker}")
+
+
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
@@ -101,13 +112,7 @@ def test_three_readers_agree_on_every_message(short_run):
 def test_a_crashed_child_stops_the_run_with_its_code_and_log(tmp_path):
     proc = start_run(tmp_path, "--duration", "60")
     try:
-        deadline = time.monotonic() + 60
-        controller = None
-        while controller is None and time.monotonic() < deadline:
-            time.sleep(0.2)
-            controller = next((p for p in children_of(proc.pid)
-                               if "controller_node" in cmdline(p)), None)
-        assert controller is not None
+        controller = wait_for_child(proc, "nfmr_dlsmc.controller_node")
         time.sleep(3.0)
         os.kill(controller, signal.SIGKILL)
         stdout, stderr = proc.communicate(timeout=60)
@@ -125,11 +130,8 @@ def test_a_crashed_child_stops_the_run_with_its_code_and_log(tmp_path):
 
 def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     proc = start_run(tmp_path, "--duration", "60")
-    deadline = time.monotonic() + 60
-    kids = []
-    while len(kids) < 2 and time.monotonic() < deadline:
-        time.sleep(0.2)
-        kids = children_of(proc.pid)
+    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
+            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
     time.sleep(3.0)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=30)
