@@ -165,13 +165,15 @@ def run(args) -> int:
     try:
         sim_args = ["--ros-args", "--params-file", str(config), "-p", f"mode:={args.mode}",
                     "-p", f"gui:={'true' if args.gui else 'false'}",
-                    "-p", f"start_after_subscribers:={1 if args.no_record else 2}"]
+                    "-p", f"start_after_subscribers:={1 if args.no_record else 2}",
+                    "-p", f"max_time:={float(args.duration)!r}"]
         ctrl_args = ["--ros-args", "--params-file", str(config)]
         if args.mode == "realtime":
             ctrl_args += ["-p", "tick_source:=clock"]
         children = [start_child("sim", "nfmr_sim.sim_node", sim_args, run_dir),
                     start_child("controller", "nfmr_dlsmc.controller_node", ctrl_args, run_dir)]
         wait_for_run(children, clock, args.duration)
+        clock.spin(1.0)  # the sim has stopped stepping: let its last messages arrive
     except KeyboardInterrupt:
         interrupted = True
         status = 130

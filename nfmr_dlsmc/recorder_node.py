@@ -11,6 +11,9 @@ import threading
 
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+
+from rosgraph_msgs.msg import Clock
 
 from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
 
@@ -76,9 +79,11 @@ class RecorderNode(Node):
         clock = self.get_clock()
         if topic == "/clock":
             def callback(data, topic=topic):
-                now = clock.now().nanoseconds
-                self.last_clock_ns = now
-                put((topic, now, data))
+                # Simulated time from the message itself: the node clock may not have taken
+                # this tick yet.
+                stamp = deserialize_message(data, Clock).clock
+                self.last_clock_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+                put((topic, clock.now().nanoseconds, data))
         else:
             def callback(data, topic=topic):
                 put((topic, clock.now().nanoseconds, data))

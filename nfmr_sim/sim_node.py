@@ -87,6 +87,9 @@ class SimNode(Node):
         self._publish(out, aux=True)
         start = time.monotonic()
         while self._stepper.running.is_set():
+            if s.max_time and self.world.time >= s.max_time - 0.5 * dt:
+                self.get_logger().info(f"reached max_time {s.max_time:g} s: stepping stopped")
+                return  # the node stays up, so everything published so far is delivered
             if s.mode == "lockstep":
                 self.gate.wait_for_step_command(s.lockstep_timeout)
             else:

@@ -8,7 +8,8 @@ Array-valued parameters are flat lists: ``initial_pose`` = [x, y, yaw];
 from dataclasses import dataclass, field, fields
 
 from nfmr_dlsmc.steering import SteerMode
-from nfmr_dlsmc.validation import ParameterError, check_finite, check_positive
+from nfmr_dlsmc.validation import (ParameterError, check_finite, check_non_negative,
+                                   check_positive)
 from nfmr_sim.urdf import ChassisConfig
 from nfmr_sim.world_config import (DisturbanceConfig, ForcePulse, FrictionConfig, FrictionPatch,
                                    MotorConfig, WorldConfig)
@@ -40,6 +41,8 @@ class SimSettings:
     start_after_subscribers : int
         Do not step until ``odom`` has this many subscribers (e.g. controller and
         recorder), so that nobody misses the start of the run.
+    max_time : float
+        Stop stepping (but keep the node up) at this simulated time [s]; 0: never.
     """
 
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -50,6 +53,7 @@ class SimSettings:
     initial_pose: tuple = (0.0, 0.0, 0.0)
     gui: bool = False
     start_after_subscribers: int = 0
+    max_time: float = 0.0
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -67,6 +71,7 @@ class SimSettings:
         count = self.start_after_subscribers
         if isinstance(count, bool) or not isinstance(count, int) or count < 0:
             raise ParameterError("start_after_subscribers", count, "must be an integer >= 0")
+        check_non_negative("max_time", self.max_time, "s")
         if not isinstance(self.gui, bool):
             raise ParameterError("gui", self.gui, "must be true or false")
 
@@ -81,6 +86,7 @@ def sim_parameter_defaults() -> dict:
     defaults = {"mode": "lockstep", "physics_dt": 0.001, "lockstep_timeout": 0.5,
                 "command_timeout": 0.1, "aux_publish_every": 10,
                 "initial_pose": [0.0, 0.0, 0.0], "gui": False, "start_after_subscribers": 0,
+                "max_time": 0.0,
                 "steering.j1": 1.0, "steering.j2": 0.0}
     chassis = _scalar_fields("chassis", ChassisConfig)
     chassis["chassis.yaw_inertia"] = 0.0  # 0: that of a uniform box
@@ -132,4 +138,5 @@ def sim_settings(flat: dict) -> SimSettings:
                        command_timeout=p["command_timeout"],
                        aux_publish_every=p["aux_publish_every"],
                        initial_pose=tuple(p["initial_pose"]), gui=p["gui"],
-                       start_after_subscribers=p["start_after_subscribers"])
+                       start_after_subscribers=p["start_after_subscribers"],
+                       max_time=p["max_time"])

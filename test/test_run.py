@@ -75,7 +75,8 @@ def test_lockstep_records_every_step_and_every_reply(short_run):
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     counts = {t["topic_metadata"]["name"]: t["message_count"]
               for t in info["topics_with_message_count"]}
-    assert counts["/clock"] == counts["/odom"] >= 3000
+    # The sim stops stepping at exactly --duration: steps 0 ... 3000 of 1 ms.
+    assert counts["/clock"] == counts["/odom"] == 3001
     # One command per odometry message; extra replies come only from the safety stop after
     # the sim was shut down, and those are marked as stopped.
     with (bag / "bag_0.mcap").open("rb") as stream:
