@@ -43,6 +43,7 @@ RUN_TOPICS = {
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray", "/rosout": "rcl_interfaces/msg/Log",
 }
 STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
+LOCKSTEP_ODOM_TIMEOUT = 2.0  # [s] the controller's odometry timeout in lockstep runs
 
 
 class RunError(RuntimeError):
@@ -170,6 +171,10 @@ def run(args) -> int:
         ctrl_args = ["--ros-args", "--params-file", str(config)]
         if args.mode == "realtime":
             ctrl_args += ["-p", "tick_source:=clock"]
+        else:
+            # In lockstep a slow step on a busy machine is no fault: only a sim that stopped
+            # for good should stop the robot.
+            ctrl_args += ["-p", f"odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}"]
         children = [start_child("sim", "nfmr_sim.sim_node", sim_args, run_dir),
                     start_child("controller", "nfmr_dlsmc.controller_node", ctrl_args, run_dir)]
         wait_for_run(children, clock, args.duration)
