@@ -68,7 +68,8 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     ----------
     controller
         An object with ``reset()``, ``step(x, y, theta, x_d, y_d, xdot_d, ydot_d) -> (v, w)``,
-        ``telemetry()`` and ``TELEMETRY_FIELDS``, stepped at its own period ``dt``.
+        ``telemetry()`` and ``TELEMETRY_FIELDS``, stepped at its own period ``dt``;
+        with a ``period`` attribute [s], that period must equal ``dt``.
     trajectory
         An object with ``sample(t) -> (x_d, y_d, xdot_d, ydot_d)`` for arrays ``t``.
     x0 : sequence of 3 floats
@@ -76,7 +77,7 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     duration : float
         Simulated time [s]; the run has round(duration / dt) steps.
     dt : float
-        Step [s]; must equal the controller's period when it has one (``config.dt``).
+        Step [s]; must equal the controller's period when it has one (``controller.period``).
     disturbance : YawRateDisturbance, optional
         Yaw-rate disturbance varpi(t); none by default.
     """
@@ -86,9 +87,9 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     if len(x0) != 3:
         raise ParameterError("x0", x0, "must have 3 entries (x [m], y [m], theta [rad])")
     x, y, theta = (check_finite(f"x0[{i}]", value) for i, value in enumerate(x0))
-    config = getattr(controller, "config", None)
-    if config is not None and not math.isclose(config.dt, dt):
-        raise ParameterError("dt", dt, f"must equal the controller period {config.dt:g} s", "s")
+    period = getattr(controller, "period", None)
+    if period is not None and not math.isclose(period, dt):
+        raise ParameterError("dt", dt, f"must equal the controller period {period:g} s", "s")
     n = int(round(duration / dt))
     if n < 1:
         raise ParameterError("duration", duration, f"must cover at least one step of {dt:g} s", "s")

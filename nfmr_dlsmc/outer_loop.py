@@ -67,19 +67,23 @@ class BtintsmcOuterLoop:
         previous step's alpha times ``dt`` (a left Riemann sum), then s is formed.
         """
         g = self._gains
+        s_x, s_y = self._surfaces(x_e, y_e, dt)
+        r3, k2, h = self._r3, g.k2, g.h
+        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - g.C1 * self.alpha_x
+        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - g.C2 * self.alpha_y
+        return u_x, u_y
+
+    def _surfaces(self, x_e: float, y_e: float, dt: float) -> tuple[float, float]:
+        """Advance the integrals of eq. (32) and return (s_x, s_y) [m]; sets alpha_x, alpha_y."""
+        g = self._gains
         if self._started:
             self._int_ax += self.alpha_x * dt
             self._int_ay += self.alpha_y * dt
         else:
             self._started = True
             self._ex0, self._ey0 = x_e, y_e
-        r3, k2, h = self._r3, g.k2, g.h
-        ax = bounded_rate(x_e, g.xi, self._r2)
-        ay = bounded_rate(y_e, g.xi, self._r2)
-        s_x = x_e - self._ex0 + g.C1 * self._int_ax
-        s_y = y_e - self._ey0 + g.C2 * self._int_ay
-        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - g.C1 * ax
-        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - g.C2 * ay
-        self.s_x, self.s_y = s_x, s_y
-        self.alpha_x, self.alpha_y = ax, ay
-        return u_x, u_y
+        self.alpha_x = bounded_rate(x_e, g.xi, self._r2)
+        self.alpha_y = bounded_rate(y_e, g.xi, self._r2)
+        self.s_x = x_e - self._ex0 + g.C1 * self._int_ax
+        self.s_y = y_e - self._ey0 + g.C2 * self._int_ay
+        return self.s_x, self.s_y

@@ -32,3 +32,18 @@ def bounded_rate(e: float, xi: float, r: float) -> float:
         return 1.0 if e > 0.0 else -1.0
     value = math.sin(0.5 * math.pi * (a / xi) ** r)
     return value if e >= 0.0 else -value
+
+
+def sign(s: float) -> float:
+    """sign(s) in {-1, 0, 1}."""
+    return 1.0 if s > 0.0 else (-1.0 if s < 0.0 else 0.0)
+
+
+def saturated_sign(s: float, layer: float) -> float:
+    """sat(s / layer): the boundary-layer sign (Slotine & Li 1991, section 7.3).
+
+    Linear inside |s| < layer, sign(s) outside; ``layer`` = 0 gives the plain sign(s).
+    """
+    if abs(s) >= layer:
+        return sign(s)
+    return s / layer

@@ -1,0 +1,120 @@
+"""The double-loop cascade of Fig. 2 with any position loop and any attitude loop."""
+
+import math
+
+from nfmr_dlsmc.angles import wrap_angle
+from nfmr_dlsmc.gains import InputLimits
+from nfmr_dlsmc.saturation import saturate_inputs
+
+
+class CascadeController:
+    """Position loop -> (v, theta_d) -> attitude loop -> omega, for one robot.
+
+    Each step:
+
+    1. errors in the global frame, x_e = x - x_d, y_e = y - y_d (eq. 8);
+    2. position loop ``outer.step(x_e, y_e, xdot_d, ydot_d, dt) -> (u_x, u_y)``;
+       v = sqrt(u_x^2 + u_y^2) and theta_d = atan2(u_y, u_x) (eq. 40);
+    3. thetadot_d as the backward difference of the wrapped theta_d over the step
+       (design.md point 5; 0 at the first step), optionally low-pass filtered with time
+       constant ``filter_tau`` (0: the raw difference);
+    4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
+       attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
+    5. saturation v in [v_min, v_max], |omega| <= omega_max.
+
+    The outer loop exposes ``s_x`` and ``s_y`` (its sliding variables) after a step.
+
+    Attributes (after a step)
+    -------------------------
+    x_e, y_e : float
+        Position errors [m].
+    theta_d, thetadot_d : float
+        Desired heading [rad] and its rate [rad/s].
+    s_theta : float
+        Attitude sliding variable = theta_e [rad].
+    v_raw, omega_raw : float
+        Inputs before saturation [m/s], [rad/s].
+    v_saturated, omega_saturated : bool
+        Saturation flags.
+    """
+
+    #: Names of the values :meth:`telemetry` returns, in order.
+    TELEMETRY_FIELDS = ("x_e", "y_e", "theta_d", "thetadot_d", "theta_e", "s_x", "s_y",
+                        "v_raw", "omega_raw", "v_saturated", "omega_saturated")
+
+    __slots__ = ("name", "_limits", "_dt", "_filter_tau", "outer", "inner", "_has_previous",
+                 "x_e", "y_e", "theta_d", "thetadot_d", "s_theta", "v_raw", "omega_raw",
+                 "v_saturated", "omega_saturated")
+
+    def __init__(self, outer, inner, limits: InputLimits | None = None, dt: float = 0.001,
+                 filter_tau: float = 0.0, name: str = "cascade"):
+        self.name = name
+        self.outer = outer
+        self.inner = inner
+        self._limits = InputLimits() if limits is None else limits
+        self._dt = dt  # [s] default step length
+        self._filter_tau = filter_tau  # [s]
+        self.reset()
+
+    @property
+    def period(self) -> float:
+        """The default step length [s] (the control period)."""
+        return self._dt
+
+    def reset(self) -> None:
+        """Start over: the next step is t = 0 of a new run."""
+        self.outer.reset()
+        self.inner.reset()
+        self._has_previous = False
+        self.x_e = self.y_e = 0.0
+        self.theta_d = self.thetadot_d = self.s_theta = 0.0
+        self.v_raw = self.omega_raw = 0.0
+        self.v_saturated = self.omega_saturated = False
+
+    def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
+             ydot_d: float, dt: float | None = None) -> tuple[float, float]:
+        """One control period.
+
+        Parameters
+        ----------
+        x, y, theta : float
+            Measured pose of point P [m, m, rad].
+        x_d, y_d, xdot_d, ydot_d : float
+            Reference position [m] and velocity [m/s] at this instant.
+        dt : float, optional
+            Time since the previous step [s]; default the configured period. A loop with
+            jitter passes the measured interval so integrals and thetadot_d stay right.
+
+        Returns
+        -------
+        v, omega : float
+            Saturated inputs [m/s], [rad/s].
+        """
+        x_e = x - x_d
+        y_e = y - y_d
+        if dt is None:
+            dt = self._dt
+        u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d, dt)
+        theta_d = math.atan2(u_y, u_x)
+        if self._has_previous:
+            raw = wrap_angle(theta_d - self.theta_d) / dt
+            # First-order low-pass; with no filter (tau = 0) the gain is 1.
+            thetadot_d = self.thetadot_d + dt / (self._filter_tau + dt) * (raw - self.thetadot_d)
+        else:
+            thetadot_d = 0.0
+            self._has_previous = True
+        s_theta = wrap_angle(theta - theta_d)
+        omega_raw = self.inner.step(s_theta, thetadot_d, dt)
+        v_raw = math.hypot(u_x, u_y)
+        v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
+            v_raw, omega_raw, self._limits)
+        self.x_e, self.y_e = x_e, y_e
+        self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
+        self.v_raw, self.omega_raw = v_raw, omega_raw
+        return v, omega
+
+    def telemetry(self) -> tuple:
+        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
+                self.outer.s_x, self.outer.s_y, self.v_raw, self.omega_raw,
+                self.v_saturated, self.omega_saturated)
