@@ -1,0 +1,54 @@
+"""The paper's comparison scenarios (section 4.2): the sine reference, 100 s at 1 ms,
+Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses."""
+
+import math
+from dataclasses import dataclass
+
+from nfmr_dlsmc.controllers import build_controller
+from nfmr_dlsmc.disturbances import YawRateDisturbance, paper_disturbance
+from nfmr_dlsmc.kinematic_sim import SimResult, simulate
+from nfmr_dlsmc.trajectories import make_trajectory
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One run of the comparison: a case, a start and a disturbance.
+
+    Attributes
+    ----------
+    case : str
+        ``"case1"`` or ``"case2"``.
+    x0 : tuple of 3 floats
+        Initial pose (x [m], y [m], theta [rad]).
+    disturbance : YawRateDisturbance
+    duration : float
+        [s]
+    dt : float
+        Control and integration period [s].
+    """
+
+    case: str
+    x0: tuple
+    disturbance: YawRateDisturbance
+    duration: float = 100.0
+    dt: float = 0.001
+
+    @property
+    def start_key(self) -> str:
+        """The start as the key of ``results.json``, e.g. ``"1,4,0"``."""
+        return ",".join(f"{value:.6g}" for value in self.x0)
+
+
+#: Case 1 (a) large lateral error, (b) large longitudinal error (Fig. 7), no disturbance.
+CASE1_LATERAL = Scenario("case1", (4.0, 1.0, 0.0), YawRateDisturbance())
+CASE1_LONGITUDINAL = Scenario("case1", (1.0, 4.0, 0.0), YawRateDisturbance())
+#: Case 2: x0 = (1, 1, pi/6), 0.5 rad/s yaw-rate pulses at 5 s and 50 s.
+CASE2 = Scenario("case2", (1.0, 1.0, math.pi / 6.0), paper_disturbance())
+SCENARIOS = (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)
+
+
+def run_scenario(name: str, block: dict | None, scenario: Scenario) -> SimResult:
+    """Controller ``name`` with gain block ``block`` on ``scenario`` (paper sine, paper limits)."""
+    controller = build_controller(name, block, dt=scenario.dt)
+    return simulate(controller, make_trajectory("sine"), scenario.x0, scenario.duration,
+                    scenario.dt, scenario.disturbance)
