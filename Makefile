@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.nfmr-installed
 
-.PHONY: setup run test bench clean
+.PHONY: setup run test bench report clean
 
 setup: $(STAMP)
 
@@ -34,6 +34,9 @@ test: setup
 
 bench: setup
 	$(BIN)/nfmr-bench --nodes
+
+report: setup
+	$(BIN)/nfmr-compare --out report
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -46,6 +46,8 @@ setup(
             "nfmr-montecarlo = nfmr_dlsmc.montecarlo_cli:main",
             "nfmr-bench = nfmr_dlsmc.benchmarks:main",
             "nfmr-tune = nfmr_dlsmc.tune_cli:main",
+            "nfmr-tune-baselines = nfmr_dlsmc.baseline_tuning:main",
+            "nfmr-compare = nfmr_dlsmc.compare_cli:main",
         ],
     },
 )

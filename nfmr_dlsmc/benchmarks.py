@@ -2,7 +2,8 @@
 
 - kinematic closed loop, scalar: controller + plant steps per second on the 100 s paper
   Case 1 (100 000 steps, full telemetry recorded), best of ``--repeat`` runs of CPU time;
-- DLSMC compute per tick: p50 / p99 in microseconds over the same run;
+- compute per tick of the DLSMC and every comparison law: p50 / p99 in microseconds
+  over the same poses;
 - pybullet chassis world under a constant command (what a lockstep step costs apart from
   waiting for the command): real-time factor and microseconds per physics step;
 - pybullet closed loop, lockstep in one process (world + controller session per step);
@@ -38,18 +39,27 @@ def kinematic_steps_per_second(repeat: int) -> dict:
 
 
 def controller_tick_us(steps: int = 100_000) -> dict:
-    """Wall time of single DLSMC steps along the paper Case 1 run [us]."""
+    """Wall time of single steps [us] of every controller (shipped comparison gains), each
+    fed the same poses: those of the DLSMC's paper Case 1 run."""
+    from nfmr_dlsmc.controllers import CONTROLLER_NAMES, build_controller, default_gains_file
+    from nfmr_dlsmc.controllers import load_gain_blocks
+
     result = simulate(DlsmcController(), make_trajectory("sine"), (1.0, 4.0, 0.0), steps / 1000)
-    ctrl = DlsmcController()
+    rows = list(zip(result.state.tolist(), result.reference.tolist()))
+    blocks = load_gain_blocks(default_gains_file())
     clock = time.perf_counter_ns
-    samples = np.empty(steps)
-    rows = zip(result.state.tolist(), result.reference.tolist())
-    for k, ((x, y, theta), (x_d, y_d, xdot_d, ydot_d)) in enumerate(rows):
-        start = clock()
-        ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
-        samples[k] = clock() - start
-    return {"p50_us": float(np.percentile(samples, 50)) / 1e3,
-            "p99_us": float(np.percentile(samples, 99)) / 1e3}
+    figures = {}
+    for name in CONTROLLER_NAMES:
+        ctrl = build_controller(name, blocks.get(name))
+        step = ctrl.step
+        samples = np.empty(len(rows))
+        for k, ((x, y, theta), (x_d, y_d, xdot_d, ydot_d)) in enumerate(rows):
+            start = clock()
+            step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+            samples[k] = clock() - start
+        figures[name] = {"p50_us": float(np.percentile(samples, 50)) / 1e3,
+                         "p99_us": float(np.percentile(samples, 99)) / 1e3}
+    return figures
 
 
 def sim_world_rtf(sim_seconds: float) -> dict:
@@ -125,7 +135,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     print("kinematic closed loop (paper Case 1, 100 000 steps) ...", flush=True)
     kin = kinematic_steps_per_second(args.repeat)
-    print("DLSMC compute per tick ...", flush=True)
+    print("compute per tick of every controller ...", flush=True)
     tick = controller_tick_us()
     print(f"pybullet chassis world, {args.sim_seconds:g} s ...", flush=True)
     world = sim_world_rtf(args.sim_seconds)
@@ -142,8 +152,9 @@ def main(argv=None) -> int:
     print(f"{'figure':<44} {'value':>12}  target")
     print(f"{'kinematic closed loop [steps/s]':<44} {kin['steps_per_s']:>12,.0f}  >= 300,000")
     print(f"{'100 s paper case, best CPU [s]':<44} {kin['cpu_s_best']:>12.3f}  < 1")
-    print(f"{'DLSMC compute per tick p50 [us]':<44} {tick['p50_us']:>12.2f}")
-    print(f"{'DLSMC compute per tick p99 [us]':<44} {tick['p99_us']:>12.2f}")
+    for name, figure in tick.items():
+        print(f"{name + ' compute per tick p50 / p99 [us]':<44} {figure['p50_us']:>12.2f}"
+              f"  p99 {figure['p99_us']:.2f}")
     print(f"{'pybullet world real-time factor [-]':<44} {world['real_time_factor']:>12.1f}  >= 5")
     print(f"{'pybullet world per physics step [us]':<44} {world['us_per_step']:>12.1f}")
     print(f"{'pybullet closed loop real-time factor [-]':<44} {closed['real_time_factor']:>12.1f}  >= 5")
@@ -167,7 +178,7 @@ def main(argv=None) -> int:
             print(f"{'resident memory ' + name + ' [MB]':<44} {mb:>12.1f}")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"kinematic_scalar": kin, "dlsmc_tick": tick, "sim_world": world,
+            json.dump({"kinematic_scalar": kin, "controller_tick": tick, "sim_world": world,
                        "pybullet_closed_loop": closed, "batch": batch, "nodes": nodes},
                       fh, indent=2)
     return 0

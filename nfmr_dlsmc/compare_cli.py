@@ -1,0 +1,151 @@
+"""``nfmr-compare``: every controller on the paper's comparison scenarios -> a report
+folder with ``report.md`` (Tables 2-4 beside the paper's values), the figures of
+section 4.2 as PNG files and ``results.json``."""
+
+import argparse
+import json
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+from nfmr_dlsmc.comparison_metrics import run_metrics
+from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, SCENARIOS, run_scenario
+from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
+                                    load_gain_blocks)
+from nfmr_dlsmc.gains import InputLimits
+from nfmr_dlsmc.validation import ParameterError
+
+#: Samples per plotted point (10 ms at the 1 ms period); omega is kept as the min / max
+#: of each block so chattering stays visible.
+DECIMATION = 10
+#: (C1, C2) pairs of the DLSMC for Fig. 13 [m/s].
+C_RATIOS = ((0.6, 0.2), (0.6, 0.4), (0.6, 0.6), (0.4, 0.6), (0.2, 0.6))
+
+
+def _envelope(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Min, max and mean of each block of DECIMATION samples."""
+    n = len(signal) // DECIMATION * DECIMATION
+    blocks = signal[:n].reshape(-1, DECIMATION)
+    return blocks.min(axis=1), blocks.max(axis=1), blocks.mean(axis=1)
+
+
+def plot_series(result) -> dict:
+    """Decimated time series of one run for the figures (arrays of equal length)."""
+    telemetry = result.telemetry
+    n = len(result.t) // DECIMATION * DECIMATION
+    pick = slice(0, n, DECIMATION)
+    series = {
+        "t": result.t[pick], "x": result.state[pick, 0], "y": result.state[pick, 1],
+        "theta": result.state[pick, 2], "x_d": result.reference[pick, 0],
+        "y_d": result.reference[pick, 1], "theta_r": result.theta_r[pick],
+        "x_e": telemetry["x_e"][pick], "y_e": telemetry["y_e"][pick],
+        "distance": result.distance_error[pick], "theta_d": telemetry["theta_d"][pick],
+        "theta_e": telemetry["theta_e"][pick], "s_y": telemetry["s_y"][pick],
+        "v": result.v[pick]}
+    series["omega_min"], series["omega_max"], series["omega_mean"] = _envelope(result.omega)
+    series["omega_raw_min"], series["omega_raw_max"], _ = _envelope(telemetry["omega_raw"])
+    return series
+
+
+def run_task(task: tuple) -> tuple:
+    """One run in a worker: (key, name, block, scenario) -> (key, metrics, series)."""
+    key, name, block, scenario = task
+    result = run_scenario(name, block, scenario)
+    pulses = [p.start for p in scenario.disturbance.pulses]
+    metrics = run_metrics(result, InputLimits().omega_max, pulses)
+    return key, metrics, plot_series(result)
+
+
+def comparison_tasks(names, blocks: dict) -> list[tuple]:
+    """Every (scenario, controller) run, then the DLSMC C1:C2 runs of Fig. 13."""
+    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s)
+             for s in SCENARIOS for name in names]
+    base = blocks.get("dlsmc") or {}
+    for c1, c2 in C_RATIOS:
+        outer = {**(base.get("outer") or {}), "C1": c1, "C2": c2}
+        tasks.append((("c_ratio", CASE1_LONGITUDINAL.start_key, f"{c1:g}:{c2:g}"), "dlsmc",
+                      {**base, "outer": outer}, CASE1_LONGITUDINAL))
+    return tasks
+
+
+def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
+    """Run ``tasks`` on ``jobs`` processes; metrics and series keyed by task key."""
+    metrics, series = {}, {}
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(run_task, task) for task in tasks]
+        for done, future in enumerate(as_completed(futures), 1):
+            key, run_metrics_, run_series = future.result()
+            metrics[key], series[key] = run_metrics_, run_series
+            if progress:
+                progress(done, len(tasks), key)
+    return metrics, series
+
+
+def results_document(metrics: dict) -> dict:
+    """``results.json``: case -> start -> controller -> metrics (the C1:C2 runs under
+    ``c_ratio`` -> start -> "C1:C2")."""
+    document = {}
+    for (case, start, name), values in metrics.items():
+        document.setdefault(case, {}).setdefault(start, {})[name] = values
+    return document
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
+    parser.add_argument("--out", type=Path, default=Path("report"),
+                        help="report folder (default report/)")
+    parser.add_argument("--gains", type=Path, default=None,
+                        help="comparison gains file (default config/comparison.yaml)")
+    parser.add_argument("--controllers", nargs="+", choices=CONTROLLER_NAMES,
+                        default=list(CONTROLLER_NAMES))
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                        help="worker processes (default: all cores)")
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of ``nfmr-compare``."""
+    from nfmr_dlsmc.comparison_figures import write_figures
+    from nfmr_dlsmc.comparison_report import write_report
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.jobs < 1:
+        parser.error("--jobs must be >= 1")
+    gains_path = args.gains or default_gains_file()
+    names = list(dict.fromkeys(["dlsmc", *args.controllers]))
+    try:
+        blocks = load_gain_blocks(gains_path)
+        for name in names:
+            build_controller(name, blocks.get(name))  # every gain checked before any run
+    except ParameterError as exc:
+        parser.error(str(exc))
+    tasks = comparison_tasks(names, blocks)
+    begin = time.perf_counter()
+
+    def progress(done, total, key):
+        print(f"\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  "
+              f"{key[0]} {key[1]} {key[2]:<16}", end="", file=sys.stderr, flush=True)
+
+    print(f"nfmr-compare: {len(tasks)} runs of 100 s on {args.jobs} processes, "
+          f"gains from {gains_path}", file=sys.stderr)
+    metrics, series = run_all(tasks, args.jobs, progress)
+    print(file=sys.stderr)
+    args.out.mkdir(parents=True, exist_ok=True)
+    document = results_document(metrics)
+    (args.out / "results.json").write_text(json.dumps(document, indent=1))
+    figures = write_figures(args.out, series, names)
+    write_report(args.out / "report.md", document, figures, gains_path,
+                 time.perf_counter() - begin, len(tasks), args.jobs)
+    print(f"wrote {args.out / 'report.md'}, {len(figures)} figures and results.json "
+          f"in {time.perf_counter() - begin:.1f} s", file=sys.stderr)
+    print(args.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

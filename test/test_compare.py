@@ -1,0 +1,152 @@
+"""The controller registry, the baseline tuning and the ``nfmr-compare`` report."""
+
+import json
+
+import numpy as np
+import pytest
+
+from nfmr_dlsmc import baseline_tuning, compare_cli
+from nfmr_dlsmc.comparison_report import Finding, paper_findings
+from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, CASE2, run_scenario
+from nfmr_dlsmc.controllers import CONTROLLER_NAMES, build_controller, load_gain_blocks
+from nfmr_dlsmc.metrics import simulation_metrics
+from nfmr_dlsmc.validation import ParameterError
+
+
+@pytest.mark.parametrize("name, block, parameter, text", [
+    ("pid", {"kp": -1.0}, "pid.kp", "must be >= 0"),
+    ("pid", {"kq": 1.0}, "pid.kq", "unknown gain"),
+    ("dl_crsmc", {"outer": {"rate": 0.0}}, "dl_crsmc.outer.rate", "must be > 0"),
+    ("dntsmc", {"inner": {"p": 34}}, "dntsmc.inner.p", "odd"),
+    ("btsmc_ntsmc", {"middle": {}}, "btsmc_ntsmc.middle", "unknown section"),
+    ("dlsmc", {"outer": {"C1": "fast"}}, "dlsmc.outer.C1", "real number"),
+    ("lqr", None, "controller", "must be one of"),
+])
+def test_bad_gains_name_the_parameter(name, block, parameter, text):
+    with pytest.raises(ParameterError) as info:
+        build_controller(name, block)
+    assert info.value.parameter == parameter
+    assert text in str(info.value)
+
+
+def test_gains_file_errors(tmp_path):
+    with pytest.raises(ParameterError, match="cannot be read"):
+        load_gain_blocks(tmp_path / "missing.yaml")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("controllers:\n  pid: [\n")
+    with pytest.raises(ParameterError, match="not valid YAML"):
+        load_gain_blocks(bad)
+    unknown = tmp_path / "unknown.yaml"
+    unknown.write_text("controllers:\n  mpc: {}\n")
+    with pytest.raises(ParameterError, match="must be one of"):
+        load_gain_blocks(unknown)
+
+
+def test_dlsmc_built_by_name_is_the_paper_controller():
+    result = run_scenario("dlsmc", {}, CASE1_LONGITUDINAL)
+    assert simulation_metrics(result).iae == pytest.approx(13.5757, rel=0.02)
+
+
+def test_tuning_candidates_are_seeded_within_range_and_start_at_the_defaults():
+    first = baseline_tuning.candidates("dntsmc", 20, seed=3)
+    again = baseline_tuning.candidates("dntsmc", 20, seed=3)
+    other = baseline_tuning.candidates("dntsmc", 20, seed=4)
+    assert first == again and first != other
+    assert first[0] == {} and len(first) == 20
+    for block in first[1:]:
+        for (section, gain), (low, high) in baseline_tuning.SEARCH_SPACES["dntsmc"].items():
+            assert low <= block[section][gain] <= high
+        build_controller("dntsmc", block)  # every candidate is a valid gain set
+
+
+def test_tuning_score_is_the_table_criterion():
+    score = baseline_tuning.score("btintsmc_crsmc", {})
+    result = run_scenario("btintsmc_crsmc", {}, CASE2)
+    assert score == pytest.approx(np.sum(np.abs(result.telemetry["theta_e"])) * 0.001)
+
+
+def test_shipped_gains_record_their_search():
+    import yaml
+    from nfmr_dlsmc.controllers import default_gains_file
+
+    document = yaml.safe_load(default_gains_file().read_text())
+    assert set(document["controllers"]) == set(CONTROLLER_NAMES)
+    assert document["controllers"]["dlsmc"] == {}
+    record = document["tuning"]["results"]
+    assert set(record) == set(baseline_tuning.TUNED)
+    for name in baseline_tuning.TUNED:
+        best = record[name]["best"]
+        assert record[name]["defaults"] == "diverged" or best <= record[name]["defaults"]
+
+
+def _document(case1_iae: dict, case1_std: dict) -> dict:
+    smooth = {"t_conv": 7.0, "final_distance": 0.0, "max_abs_omega_raw": 1.0,
+              "omega_raw_over_limit": 0.0, "omega_raw_tv": 0.1}
+    runs = {n: smooth | {"iae": case1_iae[n], "std": case1_std[n]} for n in case1_iae}
+    return {"case1": {CASE1_LONGITUDINAL.start_key: runs}}
+
+
+def test_findings_follow_the_numbers():
+    iae = {"pid": 30.0, "csmc": 20.0, "dl_crsmc": 15.0, "dntsmc": 14.0, "btsmc_ntsmc": 16.0,
+           "dlsmc": 13.0}
+    std = dict.fromkeys(iae, 0.7) | {"dlsmc": 0.5}
+    lowest, csmc = paper_findings(_document(iae, std))
+    assert isinstance(lowest, Finding) and lowest.reproduced is True
+    assert csmc.reproduced is False  # a smooth omega inside its limit
+    lowest, _ = paper_findings(_document(iae | {"dntsmc": 12.0}, std))
+    assert lowest.reproduced is False and "DNTSMC 12.000" in lowest.evidence
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    assert compare_cli.main(["--out", str(out), "--jobs", "2"]) == 0
+    return out
+
+
+def test_report_results_are_keyed_by_case_start_and_controller(report):
+    document = json.loads((report / "results.json").read_text())
+    assert set(document["case1"]) == {"1,4,0", "4,1,0"}
+    assert set(document["case2"]) == {"1,1,0.523599"}
+    for case, starts in (("case1", ("1,4,0", "4,1,0")), ("case2", ("1,1,0.523599",))):
+        for start in starts:
+            assert set(document[case][start]) == set(CONTROLLER_NAMES)
+    dlsmc = document["case1"]["1,4,0"]["dlsmc"]
+    assert dlsmc["iae"] == pytest.approx(13.5757, rel=0.02)
+    assert dlsmc["t_conv"] == pytest.approx(7.1, rel=0.02)
+    # Each number is that of an independent run with the shipped gains.
+    blocks = load_gain_blocks("config/comparison.yaml")
+    result = run_scenario("kanayama", blocks["kanayama"], CASE1_LONGITUDINAL)
+    assert document["case1"]["1,4,0"]["kanayama"]["iae"] == pytest.approx(
+        simulation_metrics(result).iae, rel=1e-12)
+
+
+def test_report_tables_print_the_results(report):
+    document = json.loads((report / "results.json").read_text())
+    text = (report / "report.md").read_text()
+    for name in ("pid", "dlsmc", "dntsmc"):
+        assert f"{document['case1']['1,4,0'][name]['iae']:.4f}" in text
+    assert "13.5757 (" in text  # the paper's DLSMC IAE beside ours
+    assert f"{document['case2']['1,1,0.523599']['dlsmc']['theta_e_iae']:.4f}" in text
+    assert "## The paper's findings, checked" in text
+    assert text.count("reproduced**") == 4
+
+
+def test_report_figures_are_pngs_and_referenced(report):
+    text = (report / "report.md").read_text()
+    pngs = sorted(report.glob("fig*.png"))
+    assert [p.name[:5] for p in pngs] == [f"fig{n:02d}" for n in range(7, 18)]
+    for png in pngs:
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert png.stat().st_size > 20_000
+        assert f"]({png.name})" in text
+
+
+def test_compare_rejects_a_bad_gains_file(tmp_path, capsys):
+    bad = tmp_path / "gains.yaml"
+    bad.write_text("controllers:\n  pid: {kp: -2}\n")
+    with pytest.raises(SystemExit) as info:
+        compare_cli.main(["--out", str(tmp_path / "r"), "--gains", str(bad)])
+    assert info.value.code == 2
+    assert "pid.kp = -2" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
