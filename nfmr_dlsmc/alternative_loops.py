@@ -158,11 +158,13 @@ class BtsmcOuterLoop(BtintsmcOuterLoop):
         self._gains = gains
         self._r2 = gains.q2 / gains.p2
         self._r3 = math.nan  # no terminal reaching term
+        self._adaptive = False
+        self.C1, self.C2 = gains.C1, gains.C2
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
         """Errors [m], reference velocity [m/s] -> (u_x, u_y) [m/s]."""
         g = self._gains
         s_x, s_y = self._surfaces(x_e, y_e, dt)
-        return (xdot_d - g.k * s_x - g.C1 * self.alpha_x,
-                ydot_d - g.k * s_y - g.C2 * self.alpha_y)
+        return (xdot_d - g.k * s_x - self.C1 * self.alpha_x,
+                ydot_d - g.k * s_y - self.C2 * self.alpha_y)

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.special import erf
 
 from nfmr_dlsmc.angles import wrap_angles
-from nfmr_dlsmc.gains import DlsmcConfig
+from nfmr_dlsmc.gains import DlsmcConfig, adapted_rates
 from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE
 from nfmr_dlsmc.metrics import CONVERGENCE_TOLERANCE
 from nfmr_dlsmc.validation import ParameterError, check_positive
@@ -60,7 +60,8 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
 
     ``outer`` optionally maps names of :data:`PER_ROBOT_GAINS` to arrays of length N, one
     value per robot (each must satisfy its OuterLoopGains rule), so that many gain sets are
-    evaluated in one batch.
+    evaluated in one batch; ``outer["adaptive_ratio"]`` may likewise be a boolean array
+    (default: ``config.outer.adaptive_ratio`` for every robot).
     """
     x0 = np.atleast_2d(np.asarray(x0, dtype=float))
     if x0.ndim != 2 or x0.shape[1] != 3:
@@ -72,7 +73,10 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     n_steps = int(round(duration / dt))
     o, i, lim = config.outer, config.inner, config.limits
     gain = {name: np.full(len(x0), float(getattr(o, name))) for name in PER_ROBOT_GAINS}
-    for name, values in (outer or {}).items():
+    outer = dict(outer or {})
+    adaptive = np.broadcast_to(np.asarray(outer.pop("adaptive_ratio", o.adaptive_ratio),
+                                          dtype=bool), (len(x0),))
+    for name, values in outer.items():
         if name not in PER_ROBOT_GAINS:
             raise ParameterError(f"outer.{name}", "per robot",
                                  f"only {', '.join(PER_ROBOT_GAINS)} may differ per robot")
@@ -113,6 +117,9 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
         # Outer loop, eqs (32)-(35): integral first (left Riemann), then s and u.
         if ex0 is None:
             ex0, ey0 = x_e.copy(), y_e.copy()
+            if adaptive.any():
+                a1, a2 = adapted_rates(C1, C2, ex0, ey0)
+                C1, C2 = np.where(adaptive, a1, C1), np.where(adaptive, a2, C2)
         else:
             int_ax += alpha_x * dt
             int_ay += alpha_y * dt

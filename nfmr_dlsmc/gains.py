@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
+import numpy as np
+
 from nfmr_dlsmc.validation import (ParameterError, check_exponent_pair, check_finite,
                                    check_greater, check_non_negative, check_positive)
 
@@ -32,6 +34,12 @@ class OuterLoopGains:
         Odd exponents of alpha, eq. (33); 1 < p2/q2 < 2.
     p3, q3 : int
         Odd exponents of the reaching term, eqs (34), (35); 1 < p3/q3 < 2.
+    adaptive_ratio : bool
+        The paper's future-work item 1 (off by default): at t = 0 the two rates are
+        re-proportioned to the initial error, keeping their norm sqrt(C1^2 + C2^2):
+        C_i = max(norm |e_i(0)| / |e(0)|, RATIO_FLOOR norm), so that during the full-speed
+        phase the robot heads straight for the reference point (Fig. 13: the ratio sets
+        the direction of the return). See :func:`adapted_rates`.
     """
 
     prefix: ClassVar[str] = "outer"
@@ -45,9 +53,12 @@ class OuterLoopGains:
     q2: int = 17
     p3: int = 33
     q3: int = 17
+    adaptive_ratio: bool = False
 
     def __post_init__(self):
         n = self.prefix
+        if not isinstance(self.adaptive_ratio, bool):
+            raise ParameterError(f"{n}.adaptive_ratio", self.adaptive_ratio, "must be true or false")
         check_positive(f"{n}.C1", self.C1, "m/s")
         check_positive(f"{n}.C2", self.C2, "m/s")
         check_positive(f"{n}.k2", self.k2)
@@ -55,6 +66,33 @@ class OuterLoopGains:
         check_positive(f"{n}.xi", self.xi, "m")
         check_exponent_pair(f"{n}.p2", self.p2, f"{n}.q2", self.q2)
         check_exponent_pair(f"{n}.p3", self.p3, f"{n}.q3", self.q3)
+
+
+#: Least share of the rate norm either axis keeps under ``adaptive_ratio`` [-].
+RATIO_FLOOR = 0.1
+
+
+def adapted_rates(C1, C2, x_e0, y_e0):
+    """Rates proportioned to the initial error (``OuterLoopGains.adaptive_ratio``).
+
+    C_i = max(c |e_i(0)| / |e(0)|, RATIO_FLOOR c) with c = sqrt(C1^2 + C2^2) [m/s]; works
+    element-wise on numpy arrays. With e(0) = 0 the rates are kept.
+
+    Returns
+    -------
+    C1, C2 : float or ndarray
+        [m/s]
+    """
+    norm = (C1 * C1 + C2 * C2) ** 0.5
+    e_norm = (x_e0 * x_e0 + y_e0 * y_e0) ** 0.5
+    floor = RATIO_FLOOR * norm
+    if isinstance(e_norm, np.ndarray):
+        safe = np.where(e_norm > 0.0, e_norm, 1.0)
+        return (np.where(e_norm > 0.0, np.maximum(norm * np.abs(x_e0) / safe, floor), C1),
+                np.where(e_norm > 0.0, np.maximum(norm * np.abs(y_e0) / safe, floor), C2))
+    if e_norm == 0.0:
+        return C1, C2
+    return max(norm * abs(x_e0) / e_norm, floor), max(norm * abs(y_e0) / e_norm, floor)
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 import math
 
-from nfmr_dlsmc.gains import OuterLoopGains
+from nfmr_dlsmc.gains import OuterLoopGains, adapted_rates
 from nfmr_dlsmc.sliding_functions import bounded_rate
 
 
@@ -21,8 +21,13 @@ class BtintsmcOuterLoop:
     with v_d cos(theta_r) = xdot_d and v_d sin(theta_r) = ydot_d (eqs 6, 7). The integral
     is a left Riemann sum: alpha of step k, times the time to step k+1, enters at step k+1.
 
+    With ``gains.adaptive_ratio`` the rates C1, C2 are re-proportioned to e(0) at the
+    first step (:func:`~nfmr_dlsmc.gains.adapted_rates`).
+
     Attributes (after a step)
     -------------------------
+    C1, C2 : float
+        The rates in use [m/s].
     s_x, s_y : float
         Sliding variables [m].
     alpha_x, alpha_y : float
@@ -30,9 +35,10 @@ class BtintsmcOuterLoop:
     """
 
     __slots__ = ("_gains", "_r2", "_r3", "_started", "_ex0", "_ey0", "_int_ax", "_int_ay",
-                 "s_x", "s_y", "alpha_x", "alpha_y")
+                 "_adaptive", "C1", "C2", "s_x", "s_y", "alpha_x", "alpha_y")
 
     def __init__(self, gains: OuterLoopGains):
+        self._started = False
         self.gains = gains
         self.reset()
 
@@ -46,10 +52,15 @@ class BtintsmcOuterLoop:
         self._gains = gains
         self._r2 = gains.q2 / gains.p2
         self._r3 = gains.q3 / gains.p3
+        self._adaptive = gains.adaptive_ratio
+        self.C1, self.C2 = gains.C1, gains.C2
+        if self._adaptive and self._started:
+            self.C1, self.C2 = adapted_rates(gains.C1, gains.C2, self._ex0, self._ey0)
 
     def reset(self) -> None:
         """Forget e(0) and the integrals; the next step defines e(0)."""
         self._started = False
+        self.C1, self.C2 = self._gains.C1, self._gains.C2
         self._ex0 = 0.0  # [m]
         self._ey0 = 0.0  # [m]
         self._int_ax = 0.0  # int alpha(x_e) dt [s]
@@ -69,8 +80,8 @@ class BtintsmcOuterLoop:
         g = self._gains
         s_x, s_y = self._surfaces(x_e, y_e, dt)
         r3, k2, h = self._r3, g.k2, g.h
-        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - g.C1 * self.alpha_x
-        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - g.C2 * self.alpha_y
+        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - self.C1 * self.alpha_x
+        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - self.C2 * self.alpha_y
         return u_x, u_y
 
     def _surfaces(self, x_e: float, y_e: float, dt: float) -> tuple[float, float]:
@@ -82,8 +93,10 @@ class BtintsmcOuterLoop:
         else:
             self._started = True
             self._ex0, self._ey0 = x_e, y_e
+            if self._adaptive:
+                self.C1, self.C2 = adapted_rates(g.C1, g.C2, x_e, y_e)
         self.alpha_x = bounded_rate(x_e, g.xi, self._r2)
         self.alpha_y = bounded_rate(y_e, g.xi, self._r2)
-        self.s_x = x_e - self._ex0 + g.C1 * self._int_ax
-        self.s_y = y_e - self._ey0 + g.C2 * self._int_ay
+        self.s_x = x_e - self._ex0 + self.C1 * self._int_ax
+        self.s_y = y_e - self._ey0 + self.C2 * self._int_ay
         return self.s_x, self.s_y

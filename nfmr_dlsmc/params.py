@@ -130,6 +130,8 @@ def parameter_descriptions() -> dict:
         "outer.q2": f"exponent numerator of alpha, eq. 33 ({odd})",
         "outer.p3": f"exponent denominator of the reaching term ({odd}, 1 < p3/q3 < 2)",
         "outer.q3": f"exponent numerator of the reaching term ({odd})",
+        "outer.adaptive_ratio": "re-proportion C1:C2 to the initial error, keeping their norm "
+                                "(paper future work 1; off by default)",
         "inner.k1": "ABFSMC reaching gain, eq. 11 (> 0)",
         "inner.p1": f"exponent denominator, eq. 11 ({odd}, 1 < p1/q1 < 2)",
         "inner.q1": f"exponent numerator, eq. 11 ({odd})",

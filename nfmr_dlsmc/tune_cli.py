@@ -1,6 +1,8 @@
 """``nfmr-tune``: search the outer-loop gains for the fastest return, under the same limits.
 
-Random search (seeded) over C1, C2, k2 and xi, every candidate a robot of one batch:
+Random search (seeded) over C1, C2, k2 and xi, with C1:C2 either fixed or re-proportioned
+to the initial error (``outer.adaptive_ratio``, the paper's future-work item 1; ``--ratio``
+chooses which are searched), every candidate a robot of one batch:
 
 1. all candidates from the paper's Case 1 start, ranked by convergence time (1 mm);
 2. the fastest few on a Monte Carlo set of random starts: the fastest that brings every
@@ -41,6 +43,9 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar=("DX", "DY", "DTH"))
     parser.add_argument("--duration", type=float, default=100.0, help="final check [s]")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--ratio", choices=("fixed", "adaptive", "both"), default="fixed",
+                        help="C1:C2 fixed, adapted to the initial error, or candidates of "
+                             "both kinds (default: fixed)")
     parser.add_argument("--params", metavar="FILE.yaml", help="starting parameter file")
     parser.add_argument("--out", type=Path, default=Path("config/tuned_outer.yaml"))
     parser.add_argument("--json", action="store_true")
@@ -75,6 +80,10 @@ def main(argv=None) -> int:
             for k, (lo, hi) in SEARCH_RANGES.items()}
     for k in PER_ROBOT_GAINS:
         cand[k][0] = getattr(dlsmc.outer, k)
+    adaptive = {"fixed": np.zeros(m, bool), "adaptive": np.ones(m, bool),
+                "both": np.arange(m) % 2 == 1}[args.ratio]
+    adaptive[0] = dlsmc.outer.adaptive_ratio
+    cand["adaptive_ratio"] = adaptive
     print(f"stage 1: {m} gain sets from Case 1 ...", file=sys.stderr, flush=True)
     stage1 = simulate_batch(dlsmc, trajectory, np.tile(CASE1_START, (m, 1)), 40.0, outer=cand)
     order = np.argsort(np.nan_to_num(stage1.t_conv, nan=np.inf))
@@ -85,12 +94,13 @@ def main(argv=None) -> int:
     s = args.screen_starts
     print(f"stage 2: {len(finalists)} finalists x {s} random starts ...", file=sys.stderr,
           flush=True)
-    outer = {k: np.repeat(cand[k][finalists], s) for k in PER_ROBOT_GAINS}
+    outer = {k: np.repeat(cand[k][finalists], s) for k in cand}
     stage2 = simulate_batch(dlsmc, trajectory, np.tile(screen, (len(finalists), 1)), 60.0,
                             outer=outer)
     success = (~np.isnan(stage2.t_conv)).reshape(len(finalists), s).mean(axis=1)
     chosen = next((k for k, rate in zip(finalists, success) if rate == 1.0), 0)
     gains = {k: float(cand[k][chosen]) for k in PER_ROBOT_GAINS}
+    gains["adaptive_ratio"] = bool(cand["adaptive_ratio"][chosen])
 
     # Stage 3: the choice (and the paper's gains) on Case 1 and on --n fresh starts.
     print(f"stage 3: chosen gains on Case 1 and {args.n} random starts ...", file=sys.stderr,
@@ -101,7 +111,7 @@ def main(argv=None) -> int:
                            args.duration,
                            outer={k: np.concatenate([[getattr(dlsmc.outer, k), gains[k]],
                                                      np.full(args.n, gains[k])])
-                                  for k in PER_ROBOT_GAINS})
+                                  for k in gains})
     report = {
         "gains": gains, "case1_t_conv_paper_gains": float(check.t_conv[0]),
         "case1_t_conv_tuned": float(check.t_conv[1]),
@@ -117,7 +127,9 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(report))
     else:
-        print("tuned outer gains: " + ", ".join(f"{k} = {v:.4g}" for k, v in gains.items()))
+        print("tuned outer gains: " + ", ".join(f"{k} = {v:.4g}" for k, v in gains.items()
+                                                if k != "adaptive_ratio")
+              + f"; C1:C2 {'adapted to e(0)' if gains['adaptive_ratio'] else 'fixed'}")
         print(f"Case 1 convergence: {report['case1_t_conv_tuned']:.3f} s tuned, "
               f"{report['case1_t_conv_paper_gains']:.3f} s with the paper's gains (paper: 7.1 s)")
         print(f"success on {args.n} random starts: {100 * report['success_rate']:.1f} %, "

@@ -8,11 +8,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from nfmr_dlsmc.batch_sim import simulate_batch
 from nfmr_dlsmc.disturbances import paper_disturbance
 from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains
+from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
 from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.metrics import simulation_metrics
 from nfmr_dlsmc.trajectories import make_trajectory
@@ -25,6 +26,7 @@ STARTS = np.array([[1.0, 4.0, 0.0], [4.0, 1.0, 0.0], [-2.0, -1.0, math.pi], [0.2
     (DlsmcConfig(), None, "sine"),
     (DlsmcConfig(), paper_disturbance(), "sine"),
     (DlsmcConfig(inner=InnerLoopGains(anti_windup=True), thetadot_filter=0.02), None, "circle"),
+    (DlsmcConfig(outer=OuterLoopGains(adaptive_ratio=True)), None, "sine"),
 ])
 def test_batch_equals_scalar_robot_by_robot(config, disturbance, name):
     trajectory = make_trajectory(name)
@@ -74,9 +76,8 @@ def test_montecarlo_reports_success_rate_and_plots(tmp_path):
 
 
 def test_per_robot_gains_equal_separate_runs():
-    from nfmr_dlsmc.gains import OuterLoopGains
-
-    gains = {"C1": [0.6, 0.9], "C2": [0.6, 0.4], "k2": [1.0, 0.5], "xi": [0.5, 1.0]}
+    gains = {"C1": [0.6, 0.9], "C2": [0.6, 0.4], "k2": [1.0, 0.5], "xi": [0.5, 1.0],
+             "adaptive_ratio": [False, True]}
     start = [[1.0, 4.0, 0.0]] * 2
     together = simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 15.0, outer=gains)
     for k in range(2):
@@ -91,15 +92,20 @@ def test_per_robot_gains_equal_separate_runs():
         simulate_batch(DlsmcConfig(), make_trajectory("sine"), start, 1.0, outer={"h": [1, 1]})
 
 
-def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path):
+@pytest.mark.parametrize("ratio", ["fixed", "both"])
+def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path, ratio):
     out = tmp_path / "tuned.yaml"
     bin_dir = Path(sys.executable).parent
     proc = subprocess.run([str(bin_dir / "nfmr-tune"), "--candidates", "24", "--finalists", "3",
                            "--screen-starts", "8", "--n", "16", "--duration", "30", "--seed", "2",
-                           "--out", str(out), "--json"], capture_output=True, text=True,
-                          timeout=300)
+                           "--ratio", ratio, "--out", str(out), "--json"],
+                          capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     report = json.loads(proc.stdout.strip().splitlines()[-1])
+    written = yaml.safe_load(out.read_text())["controller"]["ros__parameters"]["outer"]
+    assert written == report["gains"]
+    if ratio == "fixed":
+        assert written["adaptive_ratio"] is False
     assert report["case1_t_conv_tuned"] <= report["case1_t_conv_paper_gains"]
     assert report["case1_t_conv_paper_gains"] == pytest.approx(7.009, abs=2e-3)
     assert report["max_v"] <= 2.0 and report["max_abs_omega"] <= 1.59

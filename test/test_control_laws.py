@@ -157,3 +157,26 @@ def test_thetadot_filter_is_a_first_order_low_pass():
     ctrl.step(0.0, 0.0, 0.0, -1.0, 0.5, 0.0, 0.0)
     raw = math.remainder(ctrl.theta_d - before, 2 * math.pi) / DT
     assert ctrl.thetadot_d == pytest.approx(0.1 * raw)  # gain dt / (tau + dt) = 0.1
+
+
+def test_adapted_rates_follow_the_initial_error_and_keep_their_norm():
+    from nfmr_dlsmc.gains import RATIO_FLOOR, adapted_rates
+
+    norm = math.hypot(0.6, 0.6)
+    c1, c2 = adapted_rates(0.6, 0.6, 1.0, -4.0)
+    assert (c1, c2) == pytest.approx((norm / math.sqrt(17.0), 4.0 * norm / math.sqrt(17.0)))
+    assert math.hypot(c1, c2) == pytest.approx(norm)
+    assert adapted_rates(0.6, 0.6, 0.0, 3.0) == pytest.approx((RATIO_FLOOR * norm, norm))
+    assert adapted_rates(0.6, 0.8, 0.0, 0.0) == (0.6, 0.8)
+
+
+def test_outer_loop_with_adaptive_ratio_uses_the_adapted_rates_from_the_first_step():
+    loop = BtintsmcOuterLoop(OuterLoopGains(adaptive_ratio=True))
+    u_x, u_y = loop.step(1.0, 4.0, 0.5, 0.25, DT)
+    c1, c2 = loop.C1, loop.C2
+    assert c2 == pytest.approx(4.0 * c1)
+    assert (u_x, u_y) == pytest.approx((0.5 - c1, 0.25 - c2))
+    loop.step(0.999, 3.9, 0.5, 0.25, DT)
+    assert loop.s_y == pytest.approx(3.9 - 4.0 + c2 * DT)
+    loop.reset()
+    assert (loop.C1, loop.C2) == (0.6, 0.6)
