@@ -8,7 +8,8 @@ on the fly, so thousands of robots fit in memory.
 """
 
 import math
-from dataclasses import dataclass
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, fields
 
 import numpy as np
 from scipy.special import erf
@@ -51,6 +52,34 @@ def _sig_pow(s, r):
 
 #: Outer-loop gains that may differ per robot (see ``outer`` of :func:`simulate_batch`).
 PER_ROBOT_GAINS = ("C1", "C2", "k2", "xi")
+
+
+def simulate_batch_parallel(config: DlsmcConfig, trajectory, x0, duration: float,
+                            disturbance=None, outer=None, jobs: int = 1) -> BatchResult:
+    """:func:`simulate_batch` with the robots split over ``jobs`` processes.
+
+    Robots are independent, so each process steps its share and the per-robot results
+    are joined in the order of ``x0``: the same numbers as one batch (poses are not
+    recorded). With ``jobs`` = 1 or fewer robots than processes it runs in this process.
+    """
+    x0 = np.atleast_2d(np.asarray(x0, dtype=float))
+    jobs = max(1, min(int(jobs), len(x0)))
+    if jobs == 1:
+        return simulate_batch(config, trajectory, x0, duration, disturbance, outer=outer)
+    bounds = np.linspace(0, len(x0), jobs + 1).astype(int)
+    per_robot = {k: np.broadcast_to(np.asarray(v), (len(x0),)) for k, v in (outer or {}).items()}
+    parts = [(config, trajectory, x0[a:b], duration, disturbance, False,
+              {k: v[a:b] for k, v in per_robot.items()})
+             for a, b in zip(bounds[:-1], bounds[1:])]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        results = list(pool.map(_simulate_part, parts))
+    return BatchResult(**{f.name: None if f.name == "states" else
+                          np.concatenate([getattr(r, f.name) for r in results])
+                          for f in fields(BatchResult)})
+
+
+def _simulate_part(arguments) -> BatchResult:
+    return simulate_batch(*arguments)
 
 
 def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,

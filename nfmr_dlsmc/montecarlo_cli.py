@@ -3,13 +3,14 @@
 import argparse
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from nfmr_dlsmc.batch_sim import simulate_batch
+from nfmr_dlsmc.batch_sim import simulate_batch_parallel
 from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
 from nfmr_dlsmc.validation import ParameterError
@@ -44,6 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--plots", type=Path, metavar="DIR",
                         help="write a t_conv histogram and a scatter of the starts here")
     parser.add_argument("--json", action="store_true", help="print one JSON object (last line)")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                        help="processes sharing the robots (default: all cores)")
     return parser
 
 
@@ -100,6 +103,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error(f"argument --n: must be >= 1, got {args.n}")
+    if args.jobs < 1:
+        parser.error(f"argument --jobs: must be >= 1, got {args.jobs}")
     if not args.duration > 0.0:
         parser.error(f"argument --duration: must be > 0, got {args.duration}")
     try:
@@ -113,8 +118,8 @@ def main(argv=None) -> int:
     starts = origin + rng.uniform(-1.0, 1.0, (args.n, 3)) * half
     print(f"{args.n} starts, {args.duration:g} s each ...", file=sys.stderr, flush=True)
     begin = time.perf_counter()
-    result = simulate_batch(params.dlsmc, params.trajectory, starts, args.duration,
-                            disturbance_by_name(args.disturbance))
+    result = simulate_batch_parallel(params.dlsmc, params.trajectory, starts, args.duration,
+                                     disturbance_by_name(args.disturbance), jobs=args.jobs)
     elapsed = time.perf_counter() - begin
     summary = summarise(starts, result, args.duration)
     summary["wall_s"] = round(elapsed, 3)

@@ -16,6 +16,7 @@ as a parameter file ready for ``--params`` / ``--params-file``.
 import argparse
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -23,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from nfmr_dlsmc.batch_sim import PER_ROBOT_GAINS, simulate_batch
+from nfmr_dlsmc.batch_sim import PER_ROBOT_GAINS, simulate_batch_parallel
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
 from nfmr_dlsmc.validation import ParameterError
 
@@ -49,6 +50,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--params", metavar="FILE.yaml", help="starting parameter file")
     parser.add_argument("--out", type=Path, default=Path("config/tuned_outer.yaml"))
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                        help="processes sharing each batch (default: all cores)")
     return parser
 
 
@@ -60,7 +63,7 @@ def main(argv=None) -> int:
     """Entry point of ``nfmr-tune``."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    for name in ("candidates", "finalists", "screen_starts", "n"):
+    for name in ("candidates", "finalists", "screen_starts", "n", "jobs"):
         if getattr(args, name) < 1:
             parser.error(f"argument --{name.replace('_', '-')}: must be >= 1")
     try:
@@ -85,7 +88,8 @@ def main(argv=None) -> int:
     adaptive[0] = dlsmc.outer.adaptive_ratio
     cand["adaptive_ratio"] = adaptive
     print(f"stage 1: {m} gain sets from Case 1 ...", file=sys.stderr, flush=True)
-    stage1 = simulate_batch(dlsmc, trajectory, np.tile(CASE1_START, (m, 1)), 40.0, outer=cand)
+    stage1 = simulate_batch_parallel(dlsmc, trajectory, np.tile(CASE1_START, (m, 1)), 40.0,
+                                     outer=cand, jobs=args.jobs)
     order = np.argsort(np.nan_to_num(stage1.t_conv, nan=np.inf))
     finalists = [int(k) for k in order[:args.finalists] if not np.isnan(stage1.t_conv[k])]
 
@@ -95,8 +99,8 @@ def main(argv=None) -> int:
     print(f"stage 2: {len(finalists)} finalists x {s} random starts ...", file=sys.stderr,
           flush=True)
     outer = {k: np.repeat(cand[k][finalists], s) for k in cand}
-    stage2 = simulate_batch(dlsmc, trajectory, np.tile(screen, (len(finalists), 1)), 60.0,
-                            outer=outer)
+    stage2 = simulate_batch_parallel(dlsmc, trajectory, np.tile(screen, (len(finalists), 1)),
+                                     60.0, outer=outer, jobs=args.jobs)
     success = (~np.isnan(stage2.t_conv)).reshape(len(finalists), s).mean(axis=1)
     chosen = next((k for k, rate in zip(finalists, success) if rate == 1.0), 0)
     gains = {k: float(cand[k][chosen]) for k in PER_ROBOT_GAINS}
@@ -106,12 +110,10 @@ def main(argv=None) -> int:
     print(f"stage 3: chosen gains on Case 1 and {args.n} random starts ...", file=sys.stderr,
           flush=True)
     final_starts = _starts(rng, origin, half, args.n)
-    check = simulate_batch(dlsmc, trajectory, np.vstack([CASE1_START, CASE1_START,
-                                                         final_starts]),
-                           args.duration,
-                           outer={k: np.concatenate([[getattr(dlsmc.outer, k), gains[k]],
-                                                     np.full(args.n, gains[k])])
-                                  for k in gains})
+    check = simulate_batch_parallel(
+        dlsmc, trajectory, np.vstack([CASE1_START, CASE1_START, final_starts]), args.duration,
+        outer={k: np.concatenate([[getattr(dlsmc.outer, k), gains[k]], np.full(args.n, gains[k])])
+               for k in gains}, jobs=args.jobs)
     report = {
         "gains": gains, "case1_t_conv_paper_gains": float(check.t_conv[0]),
         "case1_t_conv_tuned": float(check.t_conv[1]),

@@ -124,3 +124,15 @@ def test_shipped_tuned_gains_beat_the_paper_on_case1(request):
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["t_conv"] < 5.0 and result["max_v"] <= 2.0
+
+
+def test_robots_split_over_processes_give_the_same_numbers():
+    from nfmr_dlsmc.batch_sim import simulate_batch_parallel
+
+    starts = np.vstack([STARTS, STARTS[::-1]])
+    gains = {"C1": np.linspace(0.4, 1.0, len(starts)), "adaptive_ratio": np.arange(8) % 3 == 0}
+    one = simulate_batch(DlsmcConfig(), make_trajectory("sine"), starts, 10.0, outer=gains)
+    split = simulate_batch_parallel(DlsmcConfig(), make_trajectory("sine"), starts, 10.0,
+                                    outer=gains, jobs=3)
+    for field in ("iae", "ise", "std", "t_conv", "final_distance", "max_v", "max_abs_omega"):
+        np.testing.assert_array_equal(getattr(split, field), getattr(one, field))
