@@ -2,9 +2,9 @@
 
 import math
 
-from nfmr_dlsmc.angles import wrap_angle
 from nfmr_dlsmc.gains import InputLimits
-from nfmr_dlsmc.saturation import saturate_inputs
+
+_TWO_PI = 2.0 * math.pi
 
 
 class CascadeController:
@@ -96,18 +96,29 @@ class CascadeController:
             dt = self._dt
         u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d, dt)
         theta_d = math.atan2(u_y, u_x)
+        # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
         if self._has_previous:
-            raw = wrap_angle(theta_d - self.theta_d) / dt
+            raw = math.remainder(theta_d - self.theta_d, _TWO_PI)
+            if raw == -math.pi:
+                raw = math.pi
+            raw /= dt
             # First-order low-pass; with no filter (tau = 0) the gain is 1.
             thetadot_d = self.thetadot_d + dt / (self._filter_tau + dt) * (raw - self.thetadot_d)
         else:
             thetadot_d = 0.0
             self._has_previous = True
-        s_theta = wrap_angle(theta - theta_d)
+        s_theta = math.remainder(theta - theta_d, _TWO_PI)
+        if s_theta == -math.pi:
+            s_theta = math.pi
         omega_raw = self.inner.step(s_theta, thetadot_d, dt)
         v_raw = math.hypot(u_x, u_y)
-        v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
-            v_raw, omega_raw, self._limits)
+        limits = self._limits
+        v = limits.v_min if v_raw < limits.v_min else (
+            limits.v_max if v_raw > limits.v_max else v_raw)
+        omega = limits.omega_max if omega_raw > limits.omega_max else (
+            -limits.omega_max if omega_raw < -limits.omega_max else omega_raw)
+        self.v_saturated = v != v_raw
+        self.omega_saturated = omega != omega_raw
         self.x_e, self.y_e = x_e, y_e
         self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
         self.v_raw, self.omega_raw = v_raw, omega_raw

@@ -1,6 +1,5 @@
 """Closed-loop simulation of the unicycle kinematics (3) under a controller."""
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -112,15 +111,8 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
         y += v * sin(theta) * dt
         theta += (w + varpi) * dt
 
-    columns = _to_array(rows, 5 + len(controller.TELEMETRY_FIELDS)).T
+    columns = np.array(rows, dtype=float).reshape(n, 5 + len(controller.TELEMETRY_FIELDS)).T
     return SimResult(
         t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[4],
         disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])),
         dt=dt, final_state=np.array([x, y, theta]))
-
-
-def _to_array(rows: list, width: int) -> np.ndarray:
-    """A list of equal-length tuples -> float array of shape (len(rows), width)."""
-    flat = np.fromiter(itertools.chain.from_iterable(rows), dtype=float,
-                       count=len(rows) * width)
-    return flat.reshape(len(rows), width)
