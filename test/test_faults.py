@@ -39,25 +39,29 @@ def each_fault_logged_once(log: str) -> bool:
     return all(not ("stopping" in a and "stopping" in b) for a, b in zip(events, events[1:]))
 
 
-def test_killed_sim_stops_the_run(tmp_path):
+@pytest.mark.parametrize("child, module", [("sim", "nfmr_sim.sim_node"),
+                                           ("controller", "nfmr_dlsmc.controller_node")])
+def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child, module):
     proc = start_run(tmp_path, "--duration", "60")
     try:
-        sim = wait_for_child(proc, "nfmr_sim.sim_node")
-        wait_for_child(proc, "nfmr_dlsmc.controller_node")
+        pids = {name: wait_for_child(proc, m) for name, m in
+                (("sim", "nfmr_sim.sim_node"), ("controller", "nfmr_dlsmc.controller_node"))}
         time.sleep(4.0)
         killed_at = time.monotonic()
-        os.kill(sim, signal.SIGKILL)
+        os.kill(pids[child], signal.SIGKILL)
         stdout, stderr = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 1
-    assert "sim exited with code -9" in stderr and "sim.log" in stderr
+    assert f"{child} exited with code -9" in stderr and f"{child}.log" in stderr
     assert time.monotonic() - killed_at < 30
+    assert all(gone(pid) for pid in pids.values())
     bag = Path(stdout.strip().splitlines()[-1])
-    with Reader(bag) as reader:
+    with Reader(bag) as reader:  # finished and readable
         assert reader.message_count > 0
-    assert "Traceback" not in (bag.parent / "controller.log").read_text()
+    survivor = "controller" if child == "sim" else "sim"
+    assert "Traceback" not in (bag.parent / f"{survivor}.log").read_text()
 
 
 def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):

@@ -1,6 +1,5 @@
 """nfmr-run end to end: two node processes, real DDS, a recorded bag read three ways."""
 
-import os
 import signal
 import subprocess
 import sys
@@ -108,25 +107,6 @@ def test_three_readers_agree_on_every_message(short_run):
                               plain(deserialize_message(raw, message_class(conn.msgtype)))))
     assert len(via_rclpy) > 15_000
     assert via_mcap_ros2 == via_rosbags == via_rclpy
-
-
-def test_a_crashed_child_stops_the_run_with_its_code_and_log(tmp_path):
-    proc = start_run(tmp_path, "--duration", "60")
-    try:
-        controller = wait_for_child(proc, "nfmr_dlsmc.controller_node")
-        time.sleep(3.0)
-        os.kill(controller, signal.SIGKILL)
-        stdout, stderr = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 1
-    assert "controller exited with code -9" in stderr
-    assert "controller.log" in stderr
-    bag = Path(stdout.strip().splitlines()[-1])
-    with Reader(bag) as reader:  # finished and readable
-        assert reader.message_count > 0
-    assert not [p for p in children_of(proc.pid)]
 
 
 def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
