@@ -70,6 +70,11 @@ def _paths(ax, runs: dict, title: str, xlim, ylim) -> None:
         ax.plot(s["x"], s["y"], color=COLORS.get(name), lw=1.2, label=_label(name))
         ax.plot(s["x"][0], s["y"][0], "o", color=COLORS.get(name), ms=4)
     ax.set_xlim(*xlim)
+    if ylim is None:  # the paths' own extent within xlim
+        inside = [s["y"][(s["x"] >= xlim[0]) & (s["x"] <= xlim[1])] for s in runs.values()]
+        low = min([-1.5] + [float(y.min()) for y in inside if y.size])
+        high = max([1.5] + [float(y.max()) for y in inside if y.size])
+        ylim = (low - 0.2, high + 0.2)
     ax.set_ylim(*ylim)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
@@ -189,11 +194,11 @@ def write_figures(out: Path, series: dict, names) -> dict:
 
     if case2_inner:
         fig, ax = plt.subplots(figsize=(10, 4.5))
-        _paths(ax, case2_inner, "Case 2, x0 = (1, 1, pi/6)", (-1, 12), (-1.5, 2.5))
+        _paths(ax, case2_inner, "Case 2, x0 = (1, 1, pi/6)", (-1, 12), None)
         ax.legend(fontsize=8)
         figures["fig14"] = (_save(fig, out / "fig14_case2_paths.png").name,
                             "Fig. 14: Case 2 paths with the BTINTSMC position loop and three "
-                            "attitude loops.")
+                            "attitude loops (paths that coincide hide one another).")
 
         fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
         runs = {n: dict(s, theta_wrapped=wrap_angles(s["theta"]),
