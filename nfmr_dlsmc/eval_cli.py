@@ -7,6 +7,8 @@ import sys
 import time
 
 from nfmr_dlsmc.disturbances import disturbance_by_name
+from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
+                                    load_gain_blocks)
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.metrics import simulation_metrics
@@ -16,8 +18,6 @@ from nfmr_dlsmc.validation import ParameterError
 
 #: Table 2, DLSMC row, and section 4.2 (Case 1, x0 = (1, 4, 0)).
 PAPER_CASE1 = {"iae": 13.5757, "ise": 37.1057, "std": 0.5938, "t_conv": 7.1}
-
-CONTROLLERS = {"dlsmc": DlsmcController}
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -58,7 +58,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate one tracking scenario with the kinematic model (3) and print "
                     "the paper's metrics. Negative start values need the '=' form: "
                     "--x0=-1,2,0.")
-    parser.add_argument("--controller", choices=sorted(CONTROLLERS), default="dlsmc")
+    parser.add_argument("--controller", choices=CONTROLLER_NAMES, default="dlsmc",
+                        help="the DLSMC (gains from --params) or a comparison controller "
+                             "(gains from --gains)")
+    parser.add_argument("--gains", metavar="FILE.yaml", default=None,
+                        help="comparison gains file for a controller other than the DLSMC "
+                             "(default config/comparison.yaml)")
     parser.add_argument("--trajectory", choices=list(TRAJECTORY_TYPES), default=None,
                         help="reference with its default parameters (default: the "
                              "--params file's trajectory, else sine)")
@@ -90,6 +95,8 @@ def _scenario(args) -> tuple[ControllerParams, object]:
 def _fmt(value, digits=4) -> str:
     if value is None:
         return "never"
+    if math.isnan(value):
+        return "—"  # the controller has no theta_d
     return f"{value:.{digits}f}"
 
 
@@ -134,7 +141,15 @@ def main(argv=None) -> int:
         params, trajectory = _scenario(args)
     except (ParameterError, ParamsFileError) as exc:
         parser.error(str(exc))
-    controller = CONTROLLERS[args.controller](params.dlsmc)
+    if args.controller == "dlsmc":
+        controller = DlsmcController(params.dlsmc)
+    else:
+        try:
+            blocks = load_gain_blocks(args.gains or default_gains_file())
+            controller = build_controller(args.controller, blocks.get(args.controller),
+                                          params.dlsmc.limits, params.dlsmc.dt)
+        except ParameterError as exc:
+            parser.error(str(exc))
     start = time.process_time()
     sim = simulate(controller, trajectory, args.x0, args.duration, params.dlsmc.dt,
                    disturbance_by_name(args.disturbance))
@@ -144,8 +159,9 @@ def main(argv=None) -> int:
         "controller": args.controller, "trajectory": type(trajectory).__name__.lower(),
         "x0": list(args.x0), "duration": args.duration, "dt": params.dlsmc.dt,
         "disturbance": args.disturbance, "steps": len(sim.t), "cpu_s": round(cpu_s, 4)}
-    if args.json:
-        print(json.dumps(result))
+    if args.json:  # NaN (no theta_d) is not JSON: null
+        print(json.dumps({k: None if isinstance(v, float) and math.isnan(v) else v
+                          for k, v in result.items()}))
     else:
         paper = PAPER_CASE1 if _is_paper_case1(args, params, trajectory) else None
         print(format_table(result, paper))

@@ -88,3 +88,28 @@ def test_params_file_changes_the_run(tmp_path):
     assert slow["max_v"] == pytest.approx(0.6)
     assert slow["scenario"]["trajectory"] == "line"
     assert slow["t_conv"] is not None
+
+
+def test_a_comparison_controller_with_its_shipped_gains(request):
+    proc = run_eval("--controller", "kanayama", "--duration", "30", "--json",
+                    cwd=request.config.rootpath)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, Scenario, run_scenario
+    from nfmr_dlsmc.controllers import load_gain_blocks
+    from nfmr_dlsmc.metrics import simulation_metrics
+
+    block = load_gain_blocks(request.config.rootpath / "config" / "comparison.yaml")["kanayama"]
+    scenario = Scenario("case1", CASE1_LONGITUDINAL.x0, CASE1_LONGITUDINAL.disturbance, 30.0)
+    expected = simulation_metrics(run_scenario("kanayama", block, scenario))
+    assert result["iae"] == pytest.approx(expected.iae, rel=1e-12)
+    assert result["theta_e_iae"] is None  # Kanayama's law has no desired heading theta_d
+    assert result["scenario"]["controller"] == "kanayama"
+
+
+def test_a_bad_comparison_gains_file_is_named(tmp_path):
+    gains = tmp_path / "gains.yaml"
+    gains.write_text("controllers:\n  kanayama: {k_y: 0}\n")
+    proc = run_eval("--controller", "kanayama", "--gains", str(gains))
+    assert proc.returncode == 2
+    assert "kanayama.k_y = 0" in proc.stderr and "Traceback" not in proc.stderr
