@@ -52,10 +52,9 @@ def _time_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim=None) ->
 
 def _envelope_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim) -> None:
     for name, s in runs.items():
-        keep = s["t"][:len(s[key + "_min"])] <= span
-        t = s["t"][:len(keep)][keep]
-        ax.fill_between(t, s[key + "_min"][keep], s[key + "_max"][keep], color=COLORS.get(name),
-                        alpha=0.6, lw=0.8, label=_label(name))
+        keep = s["t"] <= span  # one envelope sample per plotted time
+        ax.fill_between(s["t"][keep], s[key + "_min"][keep], s[key + "_max"][keep],
+                        color=COLORS.get(name), alpha=0.6, lw=0.8, label=_label(name))
     ax.set_xlabel("t [s]")
     ax.set_ylabel(ylabel)
     ax.set_xlim(0.0, span)

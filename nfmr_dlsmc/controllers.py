@@ -18,7 +18,6 @@ from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.geometric_trackers import (KanayamaController, PurePursuitController,
                                            StanleyController)
-from nfmr_dlsmc.inner_loop import AbfsmcInnerLoop
 from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
 from nfmr_dlsmc.single_loop import CsmcController, DsmcController, PidController
 from nfmr_dlsmc.validation import ParameterError
@@ -133,11 +132,7 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
     if name == "dlsmc":
         return DlsmcController(DlsmcConfig(outer=outer, inner=inner, limits=limits, dt=dt))
     (outer_cls, _), (inner_cls, _) = _CASCADES[name]
-    if inner_cls is AbfsmcInnerLoop:
-        inner_loop = inner_cls(inner, limits.omega_max)
-    else:
-        inner_loop = inner_cls(inner)
-    return CascadeController(outer_cls(outer), inner_loop, limits, dt, name=name)
+    return CascadeController(outer_cls(outer), inner_cls(inner), limits, dt, name=name)
 
 
 def default_gains_file() -> Path:
