@@ -219,11 +219,16 @@ class ChassisWorld:
         change = gain * (self._steer_target - self._steer_applied)
         max_change = m.steer_rate_limit * dt
         self._steer_applied = self._steer_applied + np.clip(change, -max_change, max_change)
-        c.setJointMotorControlArray(
-            self._robot, self._steer, pybullet.POSITION_CONTROL,
-            targetPositions=self._steer_applied.tolist(),
-            forces=[m.steer_torque_limit] * 4,
-            positionGains=[m.steer_position_gain] * 4, velocityGains=[m.steer_velocity_gain] * 4)
+        # POSITION_CONTROL drives the joint towards the velocity kp (target - q) / dt, which
+        # nothing bounds but maxVelocity: when the set point reverses at the rate limit, the
+        # torque-limited joint falls behind and would catch up at 2-3 times the limit. The
+        # URDF velocity limit is not enforced, and setJointMotorControlArray has no
+        # maxVelocity, hence one call per joint.
+        for joint, target in zip(self._steer, self._steer_applied.tolist()):
+            c.setJointMotorControl2(
+                self._robot, joint, pybullet.POSITION_CONTROL, targetPosition=target,
+                force=m.steer_torque_limit, positionGain=m.steer_position_gain,
+                velocityGain=m.steer_velocity_gain, maxVelocity=m.steer_rate_limit)
         c.setJointMotorControlArray(
             self._robot, self._drive, pybullet.VELOCITY_CONTROL,
             targetVelocities=self._wheel_target.tolist(), forces=[m.drive_torque_limit] * 4)

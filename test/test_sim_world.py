@@ -150,6 +150,20 @@ def test_low_friction_patch_lets_a_side_force_push_the_robot():
     assert drift[1] > 0.2
 
 
+def test_steer_joints_never_turn_faster_than_the_rate_limit():
+    # Folds by pi and sign changes of omega reverse the steer set point at full rate; the
+    # torque-limited joint must not overshoot to catch up (it did at 2.5 times the limit).
+    limit = MotorConfig().steer_rate_limit
+    with ChassisWorld() as world:
+        fastest = 0.0
+        for k in range(40):
+            steer = np.full(4, 1.5 if k % 2 else -1.5) * (1, -1, -1, 1)
+            world.set_wheel_commands(steer, np.full(4, 3.0))
+            for _ in range(60 + 7 * (k % 5)):
+                fastest = max(fastest, float(np.max(np.abs(world.step().joint_velocity[:4]))))
+        assert 0.9 * limit < fastest <= 1.02 * limit
+
+
 def test_steer_lag_is_first_order():
     cfg = WorldConfig(motors=MotorConfig(steer_lag=0.1))
     with ChassisWorld(cfg) as world:
