@@ -159,6 +159,7 @@ class BtsmcOuterLoop(BtintsmcOuterLoop):
         self._r2 = gains.q2 / gains.p2
         self._r3 = math.nan  # no terminal reaching term
         self._adaptive = False
+        self._zone = 0.0
         self.C1, self.C2 = gains.C1, gains.C2
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,

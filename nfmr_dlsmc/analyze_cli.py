@@ -6,8 +6,9 @@ import sys
 from pathlib import Path
 
 from nfmr_dlsmc.bag_reader import BagError, read_bag
-from nfmr_dlsmc.run_analysis import (STATE_TOPIC, metrics_table, plot_runs, state_metrics,
-                                     state_series)
+from nfmr_dlsmc.metrics import HOLD_FROM
+from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, STATE_TOPIC, metrics_table, plot_runs,
+                                     state_metrics, state_series, steer_joint_rates)
 
 
 def _label(path: Path) -> str:
@@ -26,30 +27,37 @@ def build_parser() -> argparse.ArgumentParser:
                         help="bag directory or .mcap file")
     parser.add_argument("--plots", type=Path, metavar="DIR",
                         help="write overlaid trajectory, error and input plots here")
+    parser.add_argument("--hold-from", type=float, default=HOLD_FROM, metavar="SECONDS",
+                        help="start of the window of the hold figures, trajectory time [s] "
+                             f"(default {HOLD_FROM:g})")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object (last line) instead of the table")
     return parser
 
 
-def analyze(paths) -> list[dict]:
+def analyze(paths, hold_from: float = HOLD_FROM) -> list[dict]:
     """Read and measure each bag; warnings go to stderr. Raises BagError."""
     results = []
     for path in paths:
-        contents = read_bag(path, topics=[STATE_TOPIC])
+        contents = read_bag(path, topics=[STATE_TOPIC, JOINT_TOPIC])
         warning = contents.warning()
         if warning:
             print(f"nfmr-analyze: warning: {warning}", file=sys.stderr)
         series = state_series(contents)
         results.append({"path": str(path), "label": _label(path), "series": series,
-                        "metrics": state_metrics(series), "truncated": contents.truncated})
+                        "metrics": state_metrics(series, hold_from, steer_joint_rates(contents)),
+                        "truncated": contents.truncated})
     return results
 
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-analyze``; exit 2 with one line on an unreadable bag."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not args.hold_from >= 0.0:
+        parser.error(f"--hold-from must be >= 0, got {args.hold_from}")
     try:
-        results = analyze(args.bags)
+        results = analyze(args.bags, args.hold_from)
     except BagError as exc:
         print(f"nfmr-analyze: error: {exc}", file=sys.stderr)
         return 2

@@ -27,7 +27,8 @@ class DlsmcController(CascadeController):
         config = DlsmcConfig() if config is None else config
         super().__init__(BtintsmcOuterLoop(config.outer),
                          AbfsmcInnerLoop(config.inner, config.limits.omega_max),
-                         config.limits, config.dt, config.thetadot_filter, "dlsmc")
+                         config.limits, config.dt, config.thetadot_filter, "dlsmc",
+                         config.thetadot_source == "analytic")
         self.config = config
 
     @property
@@ -42,6 +43,7 @@ class DlsmcController(CascadeController):
         self._limits = config.limits
         self._dt = config.dt
         self._filter_tau = config.thetadot_filter
+        self._analytic = config.thetadot_source == "analytic"
         self.outer.gains = config.outer
         self.inner.gains = config.inner
         self.inner.omega_max = config.limits.omega_max

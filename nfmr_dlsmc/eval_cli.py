@@ -1,23 +1,28 @@
-"""``nfmr-eval``: run one scenario in the kinematic closed-loop simulator and print metrics."""
+"""``nfmr-eval``: run one scenario on the kinematic model or the pybullet chassis and print
+the metrics."""
 
 import argparse
 import json
 import math
 import sys
 import time
+from dataclasses import replace
 
 from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
+from nfmr_dlsmc.metrics import HOLD_FROM, format_metric, simulation_metrics
 from nfmr_dlsmc.params import ControllerParams, ParamsFileError, controller_params, load_params_file
+from nfmr_dlsmc.steering import steer_angle_series
 from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
 from nfmr_dlsmc.validation import ParameterError
 
 #: Table 2, DLSMC row, and section 4.2 (Case 1, x0 = (1, 4, 0)).
 PAPER_CASE1 = {"iae": 13.5757, "ise": 37.1057, "std": 0.5938, "t_conv": 7.1}
+#: The plants ``--plant`` offers.
+PLANTS = ("kinematic", "pybullet")
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -51,13 +56,27 @@ def _positive(text: str) -> float:
     return value
 
 
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``nfmr-eval`` command line."""
     parser = _OneLineParser(
         prog="nfmr-eval",
-        description="Simulate one tracking scenario with the kinematic model (3) and print "
-                    "the paper's metrics. Negative start values need the '=' form: "
-                    "--x0=-1,2,0.")
+        description="Simulate one tracking scenario with the kinematic model (3) or the "
+                    "pybullet chassis and print the paper's metrics and those of holding the "
+                    "path. Negative start values need the '=' form: --x0=-1,2,0.")
+    parser.add_argument("--plant", choices=PLANTS, default="kinematic",
+                        help="kinematic: the unicycle model (3), forward Euler (default); "
+                             "pybullet: the simulated 4WIS chassis in this process, built "
+                             "from the --params file's 'sim' section")
     parser.add_argument("--controller", choices=CONTROLLER_NAMES, default="dlsmc",
                         help="the DLSMC (gains from --params) or a comparison controller "
                              "(gains from --gains)")
@@ -74,7 +93,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="control and integration step [s] (default 0.001, or "
                              "1/control_rate of --params)")
     parser.add_argument("--disturbance", choices=("none", "paper"), default="none",
-                        help="'paper': 0.5 rad/s yaw-rate pulses in [5, 5.5) s and [50, 50.5) s")
+                        help="'paper': 0.5 rad/s yaw-rate pulses in [5, 5.5) s and [50, 50.5) s "
+                             "(on pybullet added to the commanded omega before the wheel "
+                             "mapping)")
+    parser.add_argument("--hold-from", type=_non_negative, default=HOLD_FROM, metavar="SECONDS",
+                        help=f"start of the window of the hold figures [s] (default {HOLD_FROM:g})")
     parser.add_argument("--params", metavar="FILE.yaml",
                         help="controller parameter file (ROS 2 layout, node 'controller')")
     parser.add_argument("--json", action="store_true",
@@ -92,12 +115,15 @@ def _scenario(args) -> tuple[ControllerParams, object]:
     return params, params.trajectory
 
 
-def _fmt(value, digits=4) -> str:
-    if value is None:
-        return "never"
-    if math.isnan(value):
-        return "—"  # the controller has no theta_d
-    return f"{value:.{digits}f}"
+#: The hold figures in the table: (label, unit, key).
+HOLD_ROWS = (("distance p99", " [m]", "hold_distance_p99"),
+             ("distance max", " [m]", "hold_distance_max"),
+             ("|theta_e| p99", " [rad]", "hold_theta_e_p99"),
+             ("|theta_e| max", " [rad]", "hold_theta_e_max"),
+             ("omega total variation", " [rad/s^2]", "hold_omega_tv"),
+             ("omega saturated", " [-]", "hold_omega_saturated"),
+             ("steer command rate max", " [rad/s]", "hold_steer_rate_max"),
+             ("steer joint rate max", " [rad/s]", "hold_steer_joint_rate_max"))
 
 
 def format_table(result: dict, paper: dict | None) -> str:
@@ -108,9 +134,13 @@ def format_table(result: dict, paper: dict | None) -> str:
             ("max |omega| [rad/s]", "max_abs_omega"), ("IAE of theta_e [rad*s]", "theta_e_iae"),
             ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
             ("IAE of theta - theta_r [rad*s]", "theta_r_iae"),
-            ("omega total variation after t_conv [rad/s^2]", "omega_tv_after_conv")]
+            ("omega total variation after t_conv [rad/s^2]", "omega_tv_after_conv"),
+            ("convergence time (1 cm) [s]", "t_conv_1cm")]
+    hold_from = result["hold_from"]
+    rows += [(f"{label} after {hold_from:g} s{unit}", key) for label, unit, key in HOLD_ROWS]
     scenario = result["scenario"]
-    lines = [f"{scenario['controller']} on '{scenario['trajectory']}' from x0 = "
+    lines = [f"{scenario['controller']} on the {scenario['plant']} plant, "
+             f"'{scenario['trajectory']}' from x0 = "
              f"({', '.join(f'{v:g}' for v in scenario['x0'])}), {scenario['duration']:g} s, "
              f"dt = {scenario['dt']:g} s, disturbance: {scenario['disturbance']}"]
     header = f"{'metric':<46} {'nfmr':>12}"
@@ -118,7 +148,8 @@ def format_table(result: dict, paper: dict | None) -> str:
         header += f" {'paper':>10} {'diff':>8}"
     lines += [header, "-" * len(header)]
     for label, key in rows:
-        line = f"{label:<46} {_fmt(result[key], 6 if key == 'max_abs_theta_e_after_conv' else 4):>12}"
+        value = result[key]
+        line = f"{label:<46} {format_metric(value):>12}"
         if paper and key in paper:
             ours = result[key]
             diff = "" if ours is None else f"{100.0 * (ours - paper[key]) / paper[key]:+.1f}%"
@@ -128,7 +159,7 @@ def format_table(result: dict, paper: dict | None) -> str:
 
 
 def _is_paper_case1(args, params: ControllerParams, trajectory) -> bool:
-    return (args.controller == "dlsmc" and args.disturbance == "none"
+    return (args.plant == "kinematic" and args.controller == "dlsmc" and args.disturbance == "none"
             and tuple(args.x0) == (1.0, 4.0, 0.0) and args.duration == 100.0
             and params == ControllerParams() and trajectory == make_trajectory("sine"))
 
@@ -151,22 +182,62 @@ def main(argv=None) -> int:
         except ParameterError as exc:
             parser.error(str(exc))
     start = time.process_time()
-    sim = simulate(controller, trajectory, args.x0, args.duration, params.dlsmc.dt,
-                   disturbance_by_name(args.disturbance))
+    if args.plant == "pybullet":
+        sim = _simulate_pybullet(args, params, controller, trajectory, parser)
+    else:
+        sim = simulate(controller, trajectory, args.x0, args.duration, params.dlsmc.dt,
+                       disturbance_by_name(args.disturbance))
+        sim = replace(sim, steer=steer_angle_series(sim.v, sim.omega + sim.disturbance,
+                                                    params.geometry, params.steering))
     cpu_s = time.process_time() - start
-    result = simulation_metrics(sim).as_dict()
+    result = simulation_metrics(sim, args.hold_from).as_dict()
     result["scenario"] = {
-        "controller": args.controller, "trajectory": type(trajectory).__name__.lower(),
+        "controller": args.controller, "plant": args.plant,
+        "trajectory": type(trajectory).__name__.lower(),
         "x0": list(args.x0), "duration": args.duration, "dt": params.dlsmc.dt,
         "disturbance": args.disturbance, "steps": len(sim.t), "cpu_s": round(cpu_s, 4)}
     if args.json:  # NaN (no theta_d) is not JSON: null
-        print(json.dumps({k: None if isinstance(v, float) and math.isnan(v) else v
+        print(json.dumps({k: None if isinstance(v, float) and not math.isfinite(v) else v
                           for k, v in result.items()}))
     else:
         paper = PAPER_CASE1 if _is_paper_case1(args, params, trajectory) else None
         print(format_table(result, paper))
-        print(f"{len(sim.t)} steps in {cpu_s:.2f} s CPU")
+        print(f"{len(sim.t)} steps in {cpu_s:.2f} s CPU "
+              f"({args.duration / max(cpu_s, 1e-9):.1f}x real time)")
     return 0
+
+
+def _simulate_pybullet(args, params: ControllerParams, controller, trajectory, parser):
+    """The scenario on the pybullet chassis, the world built from the file's sim section."""
+    # Imported here: the kinematic plant must not need pybullet.
+    from nfmr_dlsmc.pybullet_plant import simulate_pybullet
+    from nfmr_sim.sim_params import sim_settings
+
+    try:
+        flat = load_params_file(args.params, "sim") if args.params else {}
+        world = sim_settings(flat).world
+    except (ParameterError, ParamsFileError) as exc:
+        parser.error(str(exc))
+    if world.physics_dt != params.dlsmc.dt:
+        parser.error(f"the pybullet plant steps the controller once per physics step: "
+                     f"physics_dt = {world.physics_dt:g} s must equal the control period "
+                     f"{params.dlsmc.dt:g} s")
+    show = sys.stderr.isatty()
+
+    def progress(t):
+        if show:
+            print(f"\rpybullet {t:6.1f} / {args.duration:g} s", end="", file=sys.stderr,
+                  flush=True)
+
+    try:
+        return simulate_pybullet(controller, trajectory, args.x0, args.duration, world,
+                                 params.geometry, params.steering,
+                                 disturbance_by_name(args.disturbance), progress)
+    except ParameterError as exc:
+        parser.error(str(exc))
+    finally:
+        if show:
+            print(file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -54,6 +54,7 @@ class OuterLoopGains:
     p3: int = 33
     q3: int = 17
     adaptive_ratio: bool = False
+    linear_zone: float = 0.0
 
     def __post_init__(self):
         n = self.prefix
@@ -66,6 +67,10 @@ class OuterLoopGains:
         check_positive(f"{n}.xi", self.xi, "m")
         check_exponent_pair(f"{n}.p2", self.p2, f"{n}.q2", self.q2)
         check_exponent_pair(f"{n}.p3", self.p3, f"{n}.q3", self.q3)
+        zone = check_non_negative(f"{n}.linear_zone", self.linear_zone, "m")
+        if zone >= self.xi:
+            raise ParameterError(f"{n}.linear_zone", self.linear_zone,
+                                 f"must be < {n}.xi = {self.xi:g} m", "m")
 
 
 #: Least share of the rate norm either axis keeps under ``adaptive_ratio`` [-].
@@ -116,6 +121,13 @@ class InnerLoopGains:
     anti_windup : bool
         Hold the integral of eq. (12) while omega is saturated (not in the paper; off by
         default). See :class:`~nfmr_dlsmc.inner_loop.AbfsmcInnerLoop`.
+    boundary_layer : float
+        Robot profile (0, the paper's sign(s), by default): width phi [rad] of a boundary
+        layer that replaces sign(s_theta) in the eta_hat term of eq. (11) by
+        sat(s_theta / phi).
+    eta_max : float
+        Robot profile (0, no cap as in the paper, by default): upper bound [rad/s] on the
+        adaptive gain eta_hat in both phases; the integral of eq. (12) stops at it.
     """
 
     prefix: ClassVar[str] = "inner"
@@ -128,6 +140,8 @@ class InnerLoopGains:
     lam: float = 1.0
     eps: float = 0.01
     anti_windup: bool = False
+    boundary_layer: float = 0.0
+    eta_max: float = 0.0
 
     def __post_init__(self):
         n = self.prefix
@@ -141,6 +155,8 @@ class InnerLoopGains:
             raise ParameterError(f"{n}.eps", self.eps, "must be < pi", "rad")
         if not isinstance(self.anti_windup, bool):
             raise ParameterError(f"{n}.anti_windup", self.anti_windup, "must be true or false")
+        check_non_negative(f"{n}.boundary_layer", self.boundary_layer, "rad")
+        check_non_negative(f"{n}.eta_max", self.eta_max, "rad/s")
 
 
 @dataclass(frozen=True)
@@ -163,6 +179,10 @@ class InputLimits:
         check_positive(f"{n}.omega_max", self.omega_max, "rad/s")
 
 
+#: How thetadot_d is obtained (``DlsmcConfig.thetadot_source``).
+THETADOT_SOURCES = ("difference", "analytic")
+
+
 @dataclass(frozen=True)
 class DlsmcConfig:
     """Everything the DLSMC cascade needs: both loops, the limits and the period.
@@ -176,7 +196,14 @@ class DlsmcConfig:
         Control period [s] (paper: 1 ms).
     thetadot_filter : float
         Time constant [s] of a first-order low-pass on the backward-difference thetadot_d;
-        0 (default) uses the raw difference as the paper does (design.md point 5).
+        0 (default) uses the raw difference as the paper does (doc/design.md).
+    thetadot_source : str
+        ``difference`` (default, the paper): thetadot_d is the backward difference of the
+        wrapped theta_d over the step. ``analytic`` (robot profile): thetadot_d is the time
+        derivative of theta_d = atan2(u_y, u_x) computed from the outer law and the
+        kinematic model's error rate (see
+        :meth:`~nfmr_dlsmc.outer_loop.BtintsmcOuterLoop.input_rate`); needs
+        ``thetadot_filter`` = 0.
     """
 
     outer: OuterLoopGains = field(default_factory=OuterLoopGains)
@@ -184,10 +211,24 @@ class DlsmcConfig:
     limits: InputLimits = field(default_factory=InputLimits)
     dt: float = 0.001
     thetadot_filter: float = 0.0
+    thetadot_source: str = "difference"
 
     def __post_init__(self):
         check_positive("dt", self.dt, "s")
         check_non_negative("thetadot_filter", self.thetadot_filter, "s")
+        if self.thetadot_source not in THETADOT_SOURCES:
+            raise ParameterError("thetadot_source", self.thetadot_source,
+                                 f"must be one of {', '.join(THETADOT_SOURCES)}")
+        if self.thetadot_source == "analytic" and self.thetadot_filter != 0.0:
+            raise ParameterError("thetadot_filter", self.thetadot_filter,
+                                 "must be 0 with thetadot_source = analytic (the analytic "
+                                 "rate needs no filter)", "s")
+
+    @property
+    def is_paper_law(self) -> bool:
+        """True when every robot-profile option is off (the paper's equations)."""
+        return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
+                and self.inner.eta_max == 0.0 and self.thetadot_source == "difference")
 
 
 def gain_names(cls) -> list[str]:

@@ -3,7 +3,7 @@
 import math
 
 from nfmr_dlsmc.gains import InnerLoopGains
-from nfmr_dlsmc.sliding_functions import sig_pow
+from nfmr_dlsmc.sliding_functions import saturated_sign, sig_pow
 
 #: Phases of the adaptive gain eta_hat.
 INTEGRAL_PHASE = 0
@@ -36,6 +36,14 @@ class AbfsmcInnerLoop:
     unsaturated omega; on a robot whose yaw rate lags the command (steering actuators) the
     plain integral keeps growing while |s_theta| cannot reach eps/2, and the loop ends in a
     bang-bang limit cycle at +-omega_max.
+
+    Robot profile (both off by default, the paper's law):
+
+    - ``gains.boundary_layer`` = phi > 0 replaces sign(s) in the eta_hat term by
+      sat(s / phi), so the switching term is continuous;
+    - ``gains.eta_max`` > 0 caps eta_hat in both phases; the integral of eq. (12) does not
+      grow beyond it. An unbounded eta_hat re-locks a lagging robot into a limit cycle after
+      every barrier fallback.
 
     Attributes (after a step)
     -------------------------
@@ -89,9 +97,12 @@ class AbfsmcInnerLoop:
             self.t_bar_reached = True
         integrating = self.phase == INTEGRAL_PHASE
         eta = self._eta_integral if integrating else g.lam * a / (g.eps - a)
+        capped = 0.0 < g.eta_max <= eta
+        if capped:
+            eta = g.eta_max
         self.eta_hat = eta
-        sign = 1.0 if s_theta > 0.0 else (-1.0 if s_theta < 0.0 else 0.0)
-        omega = thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * sign
-        held = g.anti_windup and abs(omega) > self.omega_max
+        switch = saturated_sign(s_theta, g.boundary_layer)
+        omega = thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * switch
+        held = capped or (g.anti_windup and abs(omega) > self.omega_max)
         self._eta_rate = g.L0 + g.L1 * a if integrating and not held else 0.0
         return omega

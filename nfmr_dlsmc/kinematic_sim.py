@@ -32,6 +32,10 @@ class SimResult:
         Control and integration period [s].
     final_state : ndarray, shape (3,)
         Pose at t_N = N dt, after the last step.
+    steer : ndarray, shape (N, 4), or None
+        Commanded steer angles [rad], FL FR RL RR (plants with wheels only).
+    steer_joint_velocity : ndarray, shape (N, 4), or None
+        Measured steer joint rates [rad/s] (the pybullet plant only).
     """
 
     t: np.ndarray
@@ -43,6 +47,8 @@ class SimResult:
     telemetry: dict
     dt: float
     final_state: np.ndarray
+    steer: np.ndarray | None = None
+    steer_joint_velocity: np.ndarray | None = None
 
     @property
     def distance_error(self) -> np.ndarray:
@@ -56,6 +62,29 @@ class SimResult:
         return reference_heading(self.reference[:, 2], self.reference[:, 3])
 
 
+def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]:
+    """Validate a run's start: (x0 as 3 finite floats, number of steps).
+
+    Raises
+    ------
+    ParameterError
+        Bad ``x0``, ``duration`` or ``dt``, or ``dt`` unequal to ``controller.period``.
+    """
+    dt = check_positive("dt", dt, "s")
+    duration = check_positive("duration", duration, "s")
+    x0 = tuple(x0)
+    if len(x0) != 3:
+        raise ParameterError("x0", x0, "must have 3 entries (x [m], y [m], theta [rad])")
+    x0 = tuple(check_finite(f"x0[{i}]", value) for i, value in enumerate(x0))
+    period = getattr(controller, "period", None)
+    if period is not None and not math.isclose(period, dt):
+        raise ParameterError("dt", dt, f"must equal the controller period {period:g} s", "s")
+    n = int(round(duration / dt))
+    if n < 1:
+        raise ParameterError("duration", duration, f"must cover at least one step of {dt:g} s", "s")
+    return x0, n
+
+
 def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
              disturbance: YawRateDisturbance | None = None) -> SimResult:
     """Run ``controller`` against the kinematics (3) with forward Euler.
@@ -66,11 +95,13 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     Parameters
     ----------
     controller
-        An object with ``reset()``, ``step(x, y, theta, x_d, y_d, xdot_d, ydot_d) -> (v, w)``,
+        An object with ``reset()``,
+        ``step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d) -> (v, w)``,
         ``telemetry()`` and ``TELEMETRY_FIELDS``, stepped at its own period ``dt``;
         with a ``period`` attribute [s], that period must equal ``dt``.
     trajectory
-        An object with ``sample(t) -> (x_d, y_d, xdot_d, ydot_d)`` for arrays ``t``.
+        An object with ``sample(t) -> (x_d, y_d, xdot_d, ydot_d)`` and
+        ``acceleration(t) -> (xddot_d, yddot_d)`` for arrays ``t``.
     x0 : sequence of 3 floats
         Initial pose (x, y, theta) [m, m, rad].
     duration : float
@@ -80,22 +111,14 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     disturbance : YawRateDisturbance, optional
         Yaw-rate disturbance varpi(t); none by default.
     """
-    dt = check_positive("dt", dt, "s")
-    duration = check_positive("duration", duration, "s")
-    x0 = tuple(x0)
-    if len(x0) != 3:
-        raise ParameterError("x0", x0, "must have 3 entries (x [m], y [m], theta [rad])")
-    x, y, theta = (check_finite(f"x0[{i}]", value) for i, value in enumerate(x0))
-    period = getattr(controller, "period", None)
-    if period is not None and not math.isclose(period, dt):
-        raise ParameterError("dt", dt, f"must equal the controller period {period:g} s", "s")
-    n = int(round(duration / dt))
-    if n < 1:
-        raise ParameterError("duration", duration, f"must cover at least one step of {dt:g} s", "s")
+    x0, n = check_start(controller, x0, duration, dt)
+    x, y, theta = x0
 
     t = np.arange(n) * dt
     ref = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
                            for c in trajectory.sample(t)])
+    acc = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
+                           for c in trajectory.acceleration(t)])
     dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
 
     controller.reset()
@@ -104,8 +127,9 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     cos, sin = math.cos, math.sin
     rows = []
     record = rows.append
-    for (x_d, y_d, xdot_d, ydot_d), varpi in zip(ref.tolist(), dist.tolist()):
-        v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+    for (x_d, y_d, xdot_d, ydot_d), (xddot_d, yddot_d), varpi in zip(
+            ref.tolist(), acc.tolist(), dist.tolist()):
+        v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
         record((x, y, theta, v, w) + telemetry())
         x += v * cos(theta) * dt
         y += v * sin(theta) * dt

@@ -2,7 +2,8 @@
 
 Starts ``sim`` and ``controller`` from one parameter file, records every topic of the run
 into a rosbag2 MCAP bag (in this process), shows progress, and at the end prints the
-paper's metrics next to the kinematic model's for the same scenario and writes plots.
+paper's metrics and those of holding the path next to the same scenario run in this process
+on the pybullet chassis (no ROS) and on the kinematic model, and writes plots.
 The last line printed is the bag directory.
 """
 
@@ -24,11 +25,13 @@ from rclpy.signals import SignalHandlerOptions
 from nfmr_dlsmc.bag_writer import BagWriter
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
+from nfmr_dlsmc.metrics import HOLD_FROM, simulation_metrics
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
+from nfmr_dlsmc.pybullet_plant import simulate_pybullet
 from nfmr_dlsmc.recorder_node import RecorderNode
 from nfmr_dlsmc.bag_reader import read_bag
-from nfmr_dlsmc.run_analysis import metrics_table, plot_runs, state_metrics, state_series
+from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, metrics_table, plot_runs, state_metrics,
+                                     state_series, steer_joint_rates)
 from nfmr_dlsmc.validation import ParameterError
 from nfmr_sim.sim_params import sim_settings
 
@@ -65,11 +68,11 @@ class Child:
 
 
 def default_config() -> Path:
-    """``config/paper_case1.yaml`` here, else the installed copy."""
-    local = Path("config/paper_case1.yaml")
+    """``config/robot_case1.yaml`` here, else the installed copy."""
+    local = Path("config/robot_case1.yaml")
     if local.exists():
         return local
-    return Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "paper_case1.yaml"
+    return Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "robot_case1.yaml"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -78,12 +81,17 @@ def build_parser() -> argparse.ArgumentParser:
                                      "processes and record the run to an MCAP bag.")
     parser.add_argument("config", nargs="?", type=Path, default=None,
                         help="parameter file with 'sim' and 'controller' sections "
-                             "(default: config/paper_case1.yaml)")
+                             "(default: config/robot_case1.yaml, the robot profile; "
+                             "config/paper_case1.yaml holds the paper's law)")
     parser.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep")
     parser.add_argument("--duration", type=float, default=100.0, help="simulated time [s]")
     parser.add_argument("--out", type=Path, default=Path("runs"), help="parent of run folders")
     parser.add_argument("--no-record", action="store_true", help="do not write a bag")
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI")
+    parser.add_argument("--hold-from", type=float, default=HOLD_FROM, metavar="SECONDS",
+                        help=f"start of the window of the hold figures [s] (default {HOLD_FROM:g})")
+    parser.add_argument("--no-compare", action="store_true",
+                        help="skip the in-process pybullet and kinematic runs of the end table")
     return parser
 
 
@@ -147,6 +155,9 @@ def run(args) -> int:
     if not args.duration > 0.0:
         print(f"nfmr-run: error: --duration must be > 0, got {args.duration}", file=sys.stderr)
         return 2
+    if not args.hold_from >= 0.0:
+        print(f"nfmr-run: error: --hold-from must be >= 0, got {args.hold_from}", file=sys.stderr)
+        return 2
     run_dir = new_run_dir(args.out, config)
     bag_dir = run_dir / "bag"
     print(f"run folder {run_dir}", file=sys.stderr)
@@ -197,7 +208,7 @@ def run(args) -> int:
             recorder.destroy_node()
         rclpy.try_shutdown()
     if writer is not None and status == 0:
-        report(bag_dir, run_dir, params, settings, args.duration, writer.counts)
+        report(bag_dir, run_dir, params, settings, args, writer.counts)
     if writer is not None:
         print(bag_dir)
     return status if not interrupted else 130
@@ -256,18 +267,30 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
     print(file=sys.stderr)
 
 
-def report(bag_dir, run_dir, params, settings, duration, counts) -> None:
-    """Print the metrics table (pybullet vs kinematic model) and write plots."""
-    series = state_series(read_bag(bag_dir, topics=["/controller_state"]))
-    ours = state_metrics(series)
-    kin = simulate(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
-                   duration, params.dlsmc.dt)
-    kin_metrics = simulation_metrics(kin)
-    kin_series = {"t": kin.t, "x": kin.state[:, 0], "y": kin.state[:, 1],
-                  "x_d": kin.reference[:, 0], "y_d": kin.reference[:, 1],
-                  "theta_e": kin.telemetry["theta_e"], "v": kin.v, "omega": kin.omega}
-    plot_runs([("pybullet", series), ("kinematic model", kin_series)], run_dir)
-    print(metrics_table([("pybullet", ours), ("kinematic", kin_metrics)]))
+def report(bag_dir, run_dir, params, settings, args, counts) -> None:
+    """Print the metrics table (the ROS run, and unless ``--no-compare`` the same scenario
+    on the in-process pybullet plant and the kinematic model) and write plots."""
+    contents = read_bag(bag_dir, topics=["/controller_state", JOINT_TOPIC])
+    series = state_series(contents)
+    columns = [("ROS pybullet", state_metrics(series, args.hold_from,
+                                              steer_joint_rates(contents)))]
+    runs = [("ROS pybullet", series)]
+    if not args.no_compare:
+        print("the same scenario in this process: pybullet, then the kinematic model ...",
+              file=sys.stderr, flush=True)
+        plants = (("in-process pybullet", simulate_pybullet(
+                      DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
+                      args.duration, settings.world, params.geometry, params.steering)),
+                  ("kinematic", simulate(DlsmcController(params.dlsmc), params.trajectory,
+                                         settings.initial_pose, args.duration, params.dlsmc.dt)))
+        for label, sim in plants:
+            columns.append((label, simulation_metrics(sim, args.hold_from)))
+            runs.append((label, {"t": sim.t, "x": sim.state[:, 0], "y": sim.state[:, 1],
+                                 "x_d": sim.reference[:, 0], "y_d": sim.reference[:, 1],
+                                 "theta_e": sim.telemetry["theta_e"], "v": sim.v,
+                                 "omega": sim.omega}))
+    plot_runs(runs, run_dir)
+    print(metrics_table(columns))
     stopped = int(series["stopped"].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f"{sum(counts.values())} messages recorded; plots in {run_dir}")

@@ -14,6 +14,10 @@ from nfmr_dlsmc.angles import wrap_angles
 
 #: Distance error below which the robot counts as on the trajectory (section 4.2) [m].
 CONVERGENCE_TOLERANCE = 1e-3
+#: Distance error of the coarser convergence time ``t_conv_1cm`` [m].
+COARSE_TOLERANCE = 1e-2
+#: Default start of the hold window [s]: the hold figures cover t >= this.
+HOLD_FROM = 15.0
 
 
 @dataclass(frozen=True)
@@ -79,6 +83,26 @@ class TrackingMetrics:
         max |theta_e| after t_conv [rad]; None if the run never settles.
     omega_tv_after_conv : float or None
         Total variation of omega per second after t_conv [rad/s^2] (chattering).
+    t_conv_1cm : float or None
+        Last time the distance error exceeds 1 cm [s]; None if it never settles.
+
+    Holding the path, over the samples with t >= ``hold_from`` (None where the run is
+    shorter, or where the figure does not apply):
+
+    hold_from : float
+        Start of the hold window [s].
+    hold_distance_p99, hold_distance_max : float or None
+        99th percentile and maximum of the distance error [m].
+    hold_theta_e_p99, hold_theta_e_max : float or None
+        Of |theta_e| [rad] (None for laws without theta_d).
+    hold_omega_tv : float or None
+        Total variation of the commanded omega per second [rad/s^2].
+    hold_omega_saturated : float or None
+        Fraction of ticks with |omega| at its limit [-].
+    hold_steer_rate_max : float or None
+        Largest rate of the commanded steer angles [rad/s].
+    hold_steer_joint_rate_max : float or None
+        Largest measured steer joint rate [rad/s] (plants with steer joints).
     """
 
     iae: float
@@ -96,6 +120,16 @@ class TrackingMetrics:
     theta_r_std: float
     max_abs_theta_e_after_conv: float | None
     omega_tv_after_conv: float | None
+    t_conv_1cm: float | None = None
+    hold_from: float = HOLD_FROM
+    hold_distance_p99: float | None = None
+    hold_distance_max: float | None = None
+    hold_theta_e_p99: float | None = None
+    hold_theta_e_max: float | None = None
+    hold_omega_tv: float | None = None
+    hold_omega_saturated: float | None = None
+    hold_steer_rate_max: float | None = None
+    hold_steer_joint_rate_max: float | None = None
 
     def as_dict(self) -> dict:
         """The metrics as a JSON-ready dict."""
@@ -112,8 +146,50 @@ def sample_durations(t: np.ndarray) -> np.ndarray:
     return np.append(steps, np.median(steps))
 
 
-def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega,
-                     dt) -> TrackingMetrics:
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
+
+
+def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
+                 omega_saturated=None, steer=None, steer_joint_velocity=None) -> dict:
+    """The figures of holding the path over the samples with t >= ``hold_from`` [s].
+
+    Returns the ``hold_*`` fields of :class:`TrackingMetrics` as a dict (see there); a
+    figure is None when no sample lies in the window or its input is missing
+    (``omega_saturated``: the controller's per-tick flag that omega was clipped to its
+    limit; ``steer`` (N, 4) [rad]; ``steer_joint_velocity`` (N, 4) [rad/s]).
+    """
+    t = np.asarray(t, dtype=float)
+    after = t >= hold_from
+    figures = {"hold_from": float(hold_from), "hold_distance_p99": None,
+               "hold_distance_max": None, "hold_theta_e_p99": None, "hold_theta_e_max": None,
+               "hold_omega_tv": None, "hold_omega_saturated": None,
+               "hold_steer_rate_max": None, "hold_steer_joint_rate_max": None}
+    if not np.any(after):
+        return figures
+    d = np.asarray(distance, dtype=float)[after]
+    th = np.abs(np.asarray(theta_e, dtype=float)[after])
+    w = np.asarray(omega, dtype=float)[after]
+    weights = np.broadcast_to(np.asarray(dt, dtype=float), t.shape)[after]
+    figures.update(hold_distance_p99=float(np.percentile(d, 99)), hold_distance_max=float(d.max()),
+                   hold_theta_e_p99=_finite_or_none(np.percentile(th, 99)),
+                   hold_theta_e_max=_finite_or_none(th.max()),
+                   hold_omega_tv=total_variation_rate(w, weights))
+    if omega_saturated is not None:
+        figures["hold_omega_saturated"] = float(np.mean(np.asarray(omega_saturated)[after] != 0))
+    if steer is not None and d.size > 1:
+        angles = np.asarray(steer, dtype=float)[after]
+        rates = np.abs(np.diff(angles, axis=0)) / weights[:-1, None]
+        figures["hold_steer_rate_max"] = float(rates.max())
+    if steer_joint_velocity is not None:
+        figures["hold_steer_joint_rate_max"] = float(
+            np.abs(np.asarray(steer_joint_velocity, dtype=float)[after]).max())
+    return figures
+
+
+def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
+                     hold_from: float = HOLD_FROM, omega_saturated=None, steer=None,
+                     steer_joint_velocity=None) -> TrackingMetrics:
     """Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s] (a float,
     or an array of per-sample durations, see :func:`sample_durations`).
 
@@ -130,6 +206,8 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega,
         Reference tangent direction, eq. (7) [rad].
     v, omega : arrays
         Applied inputs [m/s], [rad/s].
+    hold_from, omega_saturated, steer, steer_joint_velocity
+        For the hold figures, see :func:`hold_metrics`.
     """
     t = np.asarray(t, dtype=float)
     distance = np.hypot(np.asarray(x) - x_d, np.asarray(y) - y_d)
@@ -152,12 +230,28 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega,
         max_v=float(np.max(np.abs(v))), max_abs_omega=float(np.max(np.abs(omega))),
         theta_e_iae=th_e.iae, theta_e_ise=th_e.ise, theta_e_std=th_e.std,
         theta_r_iae=th_r.iae, theta_r_ise=th_r.ise, theta_r_std=th_r.std,
-        max_abs_theta_e_after_conv=after_theta, omega_tv_after_conv=after_tv)
+        max_abs_theta_e_after_conv=after_theta, omega_tv_after_conv=after_tv,
+        t_conv_1cm=convergence_time(t, distance, COARSE_TOLERANCE),
+        **hold_metrics(t, distance, theta_e, omega, dt, hold_from, omega_saturated, steer,
+                       steer_joint_velocity))
 
 
-def simulation_metrics(result) -> TrackingMetrics:
-    """:func:`tracking_metrics` of a :class:`~nfmr_dlsmc.kinematic_sim.SimResult`."""
+def simulation_metrics(result, hold_from: float = HOLD_FROM) -> TrackingMetrics:
+    """:func:`tracking_metrics` of a :class:`~nfmr_dlsmc.kinematic_sim.SimResult`, with its
+    saturation flags, commanded steer angles and measured steer joint rates where the
+    controller and the plant have them."""
     return tracking_metrics(
         result.t, result.state[:, 0], result.state[:, 1], result.state[:, 2],
         result.reference[:, 0], result.reference[:, 1], result.telemetry["theta_d"],
-        result.theta_r, result.v, result.omega, result.dt)
+        result.theta_r, result.v, result.omega, result.dt, hold_from,
+        result.telemetry.get("omega_saturated"), result.steer, result.steer_joint_velocity)
+
+
+def format_metric(value) -> str:
+    """A metric for a table: four decimals, or four significant digits below 0.01; — for
+    None or NaN (never settles, does not apply, or the law has no theta_d)."""
+    if value is None or np.isnan(value):
+        return "—"
+    if value != 0.0 and abs(value) < 0.01:
+        return f"{value:.3e}"
+    return f"{value:.4f}"

@@ -7,7 +7,8 @@ matches any node). Nested mappings are flattened to the dotted names that ROS us
 - ``outer.*`` (:class:`~nfmr_dlsmc.gains.OuterLoopGains`), ``inner.*``
   (:class:`~nfmr_dlsmc.gains.InnerLoopGains`), ``limits.*``
   (:class:`~nfmr_dlsmc.gains.InputLimits`);
-- ``control_rate`` [Hz] (the control period is its inverse) and ``thetadot_filter`` [s];
+- ``control_rate`` [Hz] (the control period is its inverse), ``thetadot_filter`` [s] and
+  ``thetadot_source`` (``difference`` | ``analytic``);
 - ``trajectory.name`` and each trajectory's parameters under its name
   (``trajectory.sine.speed``, ``trajectory.circle.radius``, ...); the named one is used;
 - ``steering.j1``, ``steering.j2`` (:class:`~nfmr_dlsmc.steering.SteerMode`) and
@@ -121,6 +122,8 @@ def parameter_descriptions() -> dict:
     text = {
         "control_rate": "control rate [Hz] (> 0); the period is 1/rate",
         "thetadot_filter": "time constant of the low-pass on thetadot_d [s] (>= 0; 0: none)",
+        "thetadot_source": "difference: backward difference of theta_d (paper); analytic: "
+                           "derivative of eq. 40 along the model (robot profile)",
         "outer.C1": "BTINTSMC rate on x, eq. 34 [m/s] (> 0)",
         "outer.C2": "BTINTSMC rate on y, eq. 35 [m/s] (> 0)",
         "outer.k2": "BTINTSMC reaching gain, eqs 34-35 (> 0)",
@@ -132,6 +135,8 @@ def parameter_descriptions() -> dict:
         "outer.q3": f"exponent numerator of the reaching term ({odd})",
         "outer.adaptive_ratio": "re-proportion C1:C2 to the initial error, keeping their norm "
                                 "(paper future work 1; off by default)",
+        "outer.linear_zone": "half-width of a linear segment of alpha(e) around 0 [m] "
+                             "(0 <= zone < xi; 0: the paper's alpha)",
         "inner.k1": "ABFSMC reaching gain, eq. 11 (> 0)",
         "inner.p1": f"exponent denominator, eq. 11 ({odd}, 1 < p1/q1 < 2)",
         "inner.q1": f"exponent numerator, eq. 11 ({odd})",
@@ -140,6 +145,9 @@ def parameter_descriptions() -> dict:
         "inner.lam": "barrier coefficient lambda, eq. 13 [rad/s] (> 0)",
         "inner.eps": "barrier half-width epsilon, eq. 13 [rad] (0 < eps < pi)",
         "inner.anti_windup": "hold the eq. 12 integral while omega saturates (not in the paper)",
+        "inner.boundary_layer": "width of sat(s/phi) replacing sign(s) in the eta_hat term "
+                                "[rad] (>= 0; 0: the paper's sign)",
+        "inner.eta_max": "cap on eta_hat [rad/s] (>= 0; 0: no cap, the paper)",
         "limits.v_min": "least linear speed [m/s] (> 0)",
         "limits.v_max": "largest linear speed [m/s] (> v_min)",
         "limits.omega_max": "largest |yaw rate| [rad/s] (> 0)",
@@ -168,7 +176,8 @@ def parameter_descriptions() -> dict:
 def controller_parameter_defaults() -> dict:
     """Every controller parameter name with its default (the ROS declaration list)."""
     defaults = {"control_rate": 1.0 / DlsmcConfig.dt,
-                "thetadot_filter": DlsmcConfig.thetadot_filter}
+                "thetadot_filter": DlsmcConfig.thetadot_filter,
+                "thetadot_source": DlsmcConfig.thetadot_source}
     for prefix, cls in _SECTIONS.items():
         defaults.update({f"{prefix}.{f.name}": f.default for f in fields(cls)})
     defaults["trajectory.name"] = "sine"
@@ -192,6 +201,7 @@ def controller_params(flat: dict) -> ControllerParams:
     steering, trajectory = {}, {}
     control_rate = None
     thetadot_filter = DlsmcConfig.thetadot_filter
+    thetadot_source = DlsmcConfig.thetadot_source
     node_options = node_option_defaults()
     for name, value in flat.items():
         if name in node_options:
@@ -213,13 +223,15 @@ def controller_params(flat: dict) -> ControllerParams:
             control_rate = check_positive("control_rate", value, "Hz")
         elif name == "thetadot_filter":
             thetadot_filter = value
+        elif name == "thetadot_source":
+            thetadot_source = value
         else:
             raise ParameterError(name, value, "unknown parameter")
     dt = DlsmcConfig.dt if control_rate is None else 1.0 / control_rate
     dlsmc = DlsmcConfig(outer=OuterLoopGains(**grouped["outer"]),
                         inner=InnerLoopGains(**grouped["inner"]),
                         limits=InputLimits(**grouped["limits"]), dt=dt,
-                        thetadot_filter=thetadot_filter)
+                        thetadot_filter=thetadot_filter, thetadot_source=thetadot_source)
     trajectory_name = trajectory.pop("name", "sine")
     own = f"{trajectory_name}."
     trajectory = {k[len(own):]: v for k, v in trajectory.items() if k.startswith(own)}

@@ -1,5 +1,7 @@
 """Metrics and plots of recorded runs, from their ``controller_state`` topic."""
 
+
+from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
@@ -8,14 +10,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 
 from nfmr_dlsmc.bag_reader import BagContents, BagError  # noqa: E402
-from nfmr_dlsmc.metrics import (TrackingMetrics, sample_durations,  # noqa: E402
-                                tracking_metrics)
+from nfmr_dlsmc.metrics import (HOLD_FROM, TrackingMetrics, format_metric,  # noqa: E402
+                                sample_durations, tracking_metrics)
 from nfmr_dlsmc.tracking_session import STATE_FIELDS  # noqa: E402
 
 STATE_TOPIC = "/controller_state"
+JOINT_TOPIC = "/joint_states"
+#: The steer angle fields of the state, FL FR RL RR.
+STEER_FIELDS = ("steer_fl", "steer_fr", "steer_rl", "steer_rr")
 #: The state fields the metrics need.
 NEEDED_FIELDS = ("t", "x", "y", "theta", "x_d", "y_d", "theta_d", "theta_r", "theta_e", "v",
                  "omega", "stopped")
@@ -54,14 +60,46 @@ def state_series(contents: BagContents) -> dict:
     return {name: rows[:, i] for i, name in enumerate(names)}
 
 
-def state_metrics(series: dict) -> TrackingMetrics:
+def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
+    """(stamps [s], steer joint velocities (N, 4) [rad/s]) from the bag's ``/joint_states``
+    (joints named ``*_steer``, in the order FL FR RL RR), or None if it has none."""
+    stamps, rates = [], []
+    for message in contents.of(JOINT_TOPIC):
+        msg = deserialize_message(message.data, JointState)
+        steer = [i for i, name in enumerate(msg.name) if name.endswith("_steer")]
+        if len(steer) != 4 or len(msg.velocity) != len(msg.name):
+            continue
+        stamps.append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
+        rates.append([msg.velocity[i] for i in steer])
+    if not stamps:
+        return None
+    return np.asarray(stamps), np.asarray(rates, dtype=float)
+
+
+def state_metrics(series: dict, hold_from: float = HOLD_FROM,
+                  joint_rates: tuple | None = None) -> TrackingMetrics:
     """:func:`~nfmr_dlsmc.metrics.tracking_metrics` of the tracking ticks of a run, each
-    weighted by its own duration (ticks where safety stopped the robot are left out)."""
+    weighted by its own duration (ticks where safety stopped the robot are left out).
+
+    The hold figures use the state's saturation flags and steer angles (bags recorded
+    before the state carried them have no steer figure) and, with ``joint_rates`` from
+    :func:`steer_joint_rates`, the measured steer joint rates stamped at or after
+    ``hold_from`` (sim time, which starts with trajectory time within a step).
+    """
     keep = series["stopped"] == 0.0
     s = {k: v[keep] for k, v in series.items()}
-    return tracking_metrics(s["t"], s["x"], s["y"], s["theta"], s["x_d"], s["y_d"],
-                            s["theta_d"], s["theta_r"], s["v"], s["omega"],
-                            sample_durations(s["t"]))
+    steer = (np.column_stack([s[name] for name in STEER_FIELDS])
+             if all(name in s for name in STEER_FIELDS) else None)
+    metrics = tracking_metrics(s["t"], s["x"], s["y"], s["theta"], s["x_d"], s["y_d"],
+                               s["theta_d"], s["theta_r"], s["v"], s["omega"],
+                               sample_durations(s["t"]), hold_from, s.get("omega_saturated"),
+                               steer)
+    if joint_rates is not None:
+        stamps, rates = joint_rates
+        after = stamps >= hold_from
+        if np.any(after):
+            metrics = replace(metrics, hold_steer_joint_rate_max=float(np.abs(rates[after]).max()))
+    return metrics
 
 
 def plot_runs(runs: list, out_dir: Path) -> list[Path]:
@@ -128,17 +166,26 @@ TABLE_ROWS = (("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise
               ("final distance [m]", "final_distance"),
               ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
               ("IAE of theta_e [rad*s]", "theta_e_iae"), ("max v [m/s]", "max_v"),
-              ("max |omega| [rad/s]", "max_abs_omega"))
+              ("max |omega| [rad/s]", "max_abs_omega"),
+              ("convergence time (1 cm) [s]", "t_conv_1cm"),
+              ("hold: distance p99 [m]", "hold_distance_p99"),
+              ("hold: distance max [m]", "hold_distance_max"),
+              ("hold: |theta_e| p99 [rad]", "hold_theta_e_p99"),
+              ("hold: |theta_e| max [rad]", "hold_theta_e_max"),
+              ("hold: omega total variation [rad/s^2]", "hold_omega_tv"),
+              ("hold: omega saturated [-]", "hold_omega_saturated"),
+              ("hold: steer command rate max [rad/s]", "hold_steer_rate_max"),
+              ("hold: steer joint rate max [rad/s]", "hold_steer_joint_rate_max"))
 
 
 def metrics_table(columns: list) -> str:
-    """A text table, one column per (label, TrackingMetrics)."""
+    """A text table, one column per (label, TrackingMetrics); the hold rows cover
+    t >= the first column's ``hold_from``."""
     width = max([12] + [len(label) for label, _ in columns])
-    lines = [f"{'metric':<36}" + "".join(f" {label:>{width}}" for label, _ in columns)]
+    hold_from = columns[0][1].hold_from if columns else HOLD_FROM
+    lines = [f"{'metric':<40}" + "".join(f" {label:>{width}}" for label, _ in columns),
+             f"(hold: after {hold_from:g} s)"]
     for row, key in TABLE_ROWS:
-        cells = []
-        for _, metrics in columns:
-            value = getattr(metrics, key)
-            cells.append(f" {'never' if value is None else f'{value:.4f}':>{width}}")
-        lines.append(f"{row:<36}" + "".join(cells))
+        cells = [f" {format_metric(getattr(metrics, key)):>{width}}" for _, metrics in columns]
+        lines.append(f"{row:<40}" + "".join(cells))
     return "\n".join(lines)

@@ -61,9 +61,12 @@ class SingleLoopController:
         raise NotImplementedError
 
     def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
-             ydot_d: float, dt: float | None = None) -> tuple[float, float]:
+             ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
+             yddot_d: float = 0.0) -> tuple[float, float]:
         """One control period: pose of P [m, m, rad], reference position [m] and velocity
-        [m/s] -> saturated (v [m/s], omega [rad/s]); ``dt`` [s] since the previous step."""
+        [m/s] -> saturated (v [m/s], omega [rad/s]); ``dt`` [s] since the previous step.
+        The reference acceleration (``xddot_d``, ``yddot_d``) is accepted for the common
+        interface; these laws use the backward-difference rates of ``self.ref``."""
         if dt is None:
             dt = self._dt
         self.ref.update(xdot_d, ydot_d, dt)

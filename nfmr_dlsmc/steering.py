@@ -191,6 +191,28 @@ def wheel_commands(v: float, omega: float, geometry: RobotGeometry, mode: SteerM
     return wheel_commands_for_twist(vx, vy, w, geometry, hold_steer)
 
 
+def steer_angle_series(v, omega, geometry: RobotGeometry, mode: SteerMode) -> np.ndarray:
+    """The steer angles [rad] (N, 4) that :func:`wheel_commands` gives for a series of
+    unicycle inputs v [m/s], omega [rad/s] at P (N each), wheels that stand still keeping
+    their previous angle (0 at the start); vectorised over the series."""
+    v = np.asarray(v, dtype=float)
+    omega = np.asarray(omega, dtype=float)
+    if mode.is_crab:
+        raise ValueError("crab mode (j1 = -1) has no unicycle mapping with omega != 0")
+    pos = geometry.wheel_positions
+    vy = -omega * mode.zero_slip_offset(geometry.wheelbase)
+    wvx = v[:, None] - omega[:, None] * pos[None, :, 1]
+    wvy = vy[:, None] + omega[:, None] * pos[None, :, 0]
+    steer = np.arctan2(wvy, wvx)
+    steer = np.where(np.abs(steer) > 0.5 * math.pi, steer - np.copysign(math.pi, steer), steer)
+    moving = np.hypot(wvx, wvy) >= 1e-12
+    # Forward-fill the still wheels from their last moving sample.
+    index = np.where(moving, np.arange(len(v))[:, None], -1)
+    np.maximum.accumulate(index, axis=0, out=index)
+    filled = np.where(index >= 0, np.take_along_axis(steer, np.maximum(index, 0), axis=0), 0.0)
+    return np.clip(filled, -geometry.steer_limit, geometry.steer_limit)
+
+
 def twist_from_wheels(steer, wheel_speed, geometry: RobotGeometry) -> tuple[float, float, float, float]:
     """Least-squares body twist (vx, vy, omega) of the centre from measured wheel states.
 

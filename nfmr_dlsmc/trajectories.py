@@ -1,7 +1,8 @@
 """Reference trajectories with analytic first derivatives, eqs (4)-(7).
 
 Every trajectory is a frozen dataclass with ``sample(t)`` returning
-``(x_d, y_d, xdot_d, ydot_d)`` [m, m, m/s, m/s]. ``t`` may be a float or a numpy array;
+``(x_d, y_d, xdot_d, ydot_d)`` [m, m, m/s, m/s] and ``acceleration(t)`` returning
+``(xddot_d, yddot_d)`` [m/s^2]. ``t`` may be a float or a numpy array;
 the return values follow. The reference speed and tangent direction follow as
 v_d = sqrt(xdot_d^2 + ydot_d^2) (eq. 6) and theta_r = atan2(ydot_d, xdot_d) (eq. 7).
 """
@@ -45,6 +46,13 @@ class Sine:
         ydot = self.amplitude * self.wavenumber * np.cos(self.wavenumber * x) * self.speed
         return x, y, xdot, ydot
 
+    def acceleration(self, t):
+        """(x_d'', y_d'') at ``t`` [m/s^2]; y_d'' = -A k^2 s^2 sin(k x_d)."""
+        x = self.speed * t
+        k = self.wavenumber
+        return (np.zeros_like(np.asarray(t, dtype=float)),
+                -self.amplitude * k * k * self.speed ** 2 * np.sin(k * x))
+
 
 @dataclass(frozen=True)
 class Circle:
@@ -71,6 +79,12 @@ class Circle:
         x = self.radius * np.sin(phase)
         y = self.radius * (1.0 - np.cos(phase))
         return x, y, self.speed * np.cos(phase), self.speed * np.sin(phase)
+
+    def acceleration(self, t):
+        """(x_d'', y_d'') at ``t`` [m/s^2]: v^2 / R towards the centre."""
+        phase = self.speed * t / self.radius  # [rad]
+        a = self.speed ** 2 / self.radius
+        return -a * np.sin(phase), a * np.cos(phase)
 
 
 @dataclass(frozen=True)
@@ -99,6 +113,11 @@ class Line:
         one = np.ones_like(t)
         return vx * t, vy * t, vx * one, vy * one
 
+    def acceleration(self, t):
+        """(x_d'', y_d'') at ``t`` [m/s^2]: zero."""
+        zero = np.zeros_like(np.asarray(t, dtype=float))
+        return zero, zero.copy()
+
 
 @dataclass(frozen=True)
 class Lemniscate:
@@ -124,6 +143,11 @@ class Lemniscate:
         a, w = self.amplitude, self.angular_rate
         return (a * np.sin(w * t), 0.5 * a * np.sin(2.0 * w * t),
                 a * w * np.cos(w * t), a * w * np.cos(2.0 * w * t))
+
+    def acceleration(self, t):
+        """(x_d'', y_d'') at ``t`` [m/s^2]."""
+        a, w = self.amplitude, self.angular_rate
+        return -a * w * w * np.sin(w * t), -2.0 * a * w * w * np.sin(2.0 * w * t)
 
 
 TRAJECTORY_TYPES = {"sine": Sine, "circle": Circle, "line": Line, "lemniscate": Lemniscate}
