@@ -91,7 +91,15 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     value per robot (each must satisfy its OuterLoopGains rule), so that many gain sets are
     evaluated in one batch; ``outer["adaptive_ratio"]`` may likewise be a boolean array
     (default: ``config.outer.adaptive_ratio`` for every robot).
+
+    The batch implements the paper's law only: a config with a robot-profile option on
+    (``config.is_paper_law`` False) raises :class:`ParameterError`; run such configs robot
+    by robot with :func:`~nfmr_dlsmc.kinematic_sim.simulate`.
     """
+    if not config.is_paper_law:
+        raise ParameterError("config", "robot profile", "the batch simulator implements the "
+                             "paper's law only (outer.linear_zone, inner.boundary_layer and "
+                             "inner.eta_max 0, thetadot_source difference)")
     x0 = np.atleast_2d(np.asarray(x0, dtype=float))
     if x0.ndim != 2 or x0.shape[1] != 3:
         raise ParameterError("x0", x0.shape, "must have shape (N, 3): x [m], y [m], theta [rad]")

@@ -183,6 +183,7 @@ class TrackingSession:
         if step is not None and not 0.0 < step <= 100.0 * self.params.dlsmc.dt:
             step = None
         x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
+        xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
         x, y, theta = self._pose
         ctrl = self.controller
         if fault:
@@ -190,7 +191,7 @@ class TrackingSession:
             steer, wheels = self._steer.copy(), np.zeros(4)
             limited = False
         else:
-            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step)
+            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step, xddot_d, yddot_d)
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited

@@ -62,3 +62,16 @@ def test_unknown_name_and_parameter_rejected():
         make_trajectory("sine", radius=2.0)
     with pytest.raises(ParameterError, match=r"trajectory\.speed = -1 m/s: must be > 0"):
         make_trajectory("circle", speed=-1)
+
+
+@pytest.mark.parametrize("name", list(TRAJECTORY_TYPES))
+def test_acceleration_is_the_derivative_of_the_velocity(name):
+    trajectory = make_trajectory(name)
+    t = np.linspace(0.5, 60.0, 200)
+    h = 1e-5
+    _, _, xdot_plus, ydot_plus = trajectory.sample(t + h)
+    _, _, xdot_minus, ydot_minus = trajectory.sample(t - h)
+    xdd, ydd = trajectory.acceleration(t)
+    np.testing.assert_allclose(xdd, (xdot_plus - xdot_minus) / (2 * h), atol=1e-8)
+    np.testing.assert_allclose(ydd, (ydot_plus - ydot_minus) / (2 * h), atol=1e-8)
+    assert np.shape(xdd) == np.shape(ydd) == t.shape

@@ -1,0 +1,205 @@
+"""The robot profile's four options against hand-computed values, and its closed loop on the
+kinematic model (the pybullet loop is in test_pybullet_plant.py)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nfmr_dlsmc.batch_sim import simulate_batch
+from nfmr_dlsmc.dlsmc import DlsmcController
+from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
+from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
+from nfmr_dlsmc.kinematic_sim import simulate
+from nfmr_dlsmc.metrics import simulation_metrics
+from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
+from nfmr_dlsmc.params import controller_params, load_params_file
+from nfmr_dlsmc.sliding_functions import (bounded_rate, bounded_rate_slope, reaching_term,
+                                          reaching_term_slope)
+from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
+from nfmr_dlsmc.validation import ParameterError
+
+DT = 0.001
+R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
+ROBOT_FILE = "config/robot_case1.yaml"
+
+
+def robot_params():
+    return controller_params(load_params_file(ROBOT_FILE))
+
+
+# -- alpha with a linear zone ----------------------------------------------------------
+
+
+def test_linear_zone_is_the_chord_and_meets_the_curve_at_its_edge():
+    d, xi = 0.02, 0.5
+    edge = math.sin(0.5 * math.pi * (d / xi) ** R2)
+    # By hand: 0.04^(17/33) = exp(0.51515 ln 0.04) = 0.19048; sin(pi/2 * 0.19048) = 0.29476.
+    assert edge == pytest.approx(0.29476, abs=1e-4)
+    for e in (0.0, 0.005, -0.013, 0.0199):
+        assert bounded_rate(e, xi, R2, d) == pytest.approx(edge * e / d, rel=1e-12)
+    # Continuous at |e| = d from both sides, and odd.
+    for side in (1.0, -1.0):
+        inside = bounded_rate(side * (d - 1e-12), xi, R2, d)
+        outside = bounded_rate(side * (d + 1e-12), xi, R2, d)
+        assert inside == pytest.approx(outside, abs=1e-9)
+        assert outside == pytest.approx(side * edge, abs=1e-9)
+    # Beyond the zone it is the paper's alpha, and zone 0 is the paper's alpha everywhere.
+    for e in (0.03, -0.2, 0.5, 0.7):
+        assert bounded_rate(e, xi, R2, d) == bounded_rate(e, xi, R2)
+    assert bounded_rate(1e-6, xi, R2, 0.0) == math.sin(0.5 * math.pi * (1e-6 / xi) ** R2)
+
+
+@pytest.mark.parametrize("e", [-0.4, -0.1, -0.021, -0.01, 0.004, 0.05, 0.3, 0.49, 0.6])
+def test_alpha_slope_matches_a_central_difference(e):
+    d, xi, h = 0.02, 0.5, 1e-7
+    numeric = (bounded_rate(e + h, xi, R2, d) - bounded_rate(e - h, xi, R2, d)) / (2 * h)
+    assert bounded_rate_slope(e, xi, R2, d) == pytest.approx(numeric, rel=1e-5, abs=1e-6)
+
+
+def test_paper_alpha_slope_is_infinite_at_zero():
+    assert bounded_rate_slope(0.0, 0.5, R2, 0.0) == math.inf
+    assert bounded_rate_slope(1e-9, 0.5, R2, 0.0) > 1e3
+
+
+@pytest.mark.parametrize("s", [-1.0, -0.05, -1e-4, 2e-3, 0.3, 2.0])
+def test_reaching_term_slope_matches_a_central_difference(s):
+    h = 1e-8
+    numeric = (reaching_term(s + h, R3, 2.0) - reaching_term(s - h, R3, 2.0)) / (2 * h)
+    assert reaching_term_slope(s, R3, 2.0) == pytest.approx(numeric, rel=1e-5, abs=1e-6)
+
+
+def test_reaching_term_slope_vanishes_at_zero():
+    # g(s) ~ (2 h / sqrt(pi)) |s|^(1 + r): its slope goes to 0 like |s|^r.
+    assert reaching_term_slope(0.0, R3, 2.0) == 0.0
+    near = reaching_term_slope(1e-6, R3, 2.0)
+    assert near == pytest.approx((1 + R3) * 4 / math.sqrt(math.pi) * 1e-6 ** R3, rel=1e-3)
+
+
+# -- the inner loop's boundary layer and cap --------------------------------------------
+
+
+def test_boundary_layer_replaces_sign_inside_the_layer_only():
+    phi = 0.005
+    loop = AbfsmcInnerLoop(InnerLoopGains(boundary_layer=phi))
+    loop.step(0.5, 0.0, DT)  # integral phase: eta grows by (L0 + L1 * 0.5) dt
+    eta = (1.0 + 1.2 * 0.5) * DT
+    # |s| = 6 mrad: integral phase (> eps / 2) and outside the layer, so sign(s).
+    w = loop.step(0.006, 0.0, DT)
+    assert loop.phase == INTEGRAL_PHASE and loop.eta_hat == pytest.approx(eta)
+    assert w == pytest.approx(-(0.006 ** R1) - eta)
+    w = loop.step(-0.004, 0.1, DT)  # |s| = 4 mrad <= eps/2: barrier phase, inside the layer
+    assert loop.phase == BARRIER_PHASE
+    barrier = 1.0 * 0.004 / (0.01 - 0.004)
+    assert w == pytest.approx(0.1 + 0.004 ** R1 + barrier * 0.004 / phi)
+
+
+def test_eta_cap_bounds_both_phases_and_stops_the_integral():
+    cap = 0.5
+    loop = AbfsmcInnerLoop(InnerLoopGains(eta_max=cap))
+    paper = AbfsmcInnerLoop(InnerLoopGains())
+    for _ in range(2000):  # 2 s at |s| = 1: the paper's integral reaches 2.2 * 2 = 4.4
+        loop.step(1.0, 0.0, DT)
+        paper.step(1.0, 0.0, DT)
+    assert paper.eta_hat == pytest.approx(2.2 * 1.999, rel=1e-6)
+    assert loop.eta_hat == cap
+    # In the barrier phase near eps the barrier (9 rad/s at 0.9 eps) is capped too ...
+    loop.step(0.004, 0.0, DT)
+    w = loop.step(0.009, 0.0, DT)
+    assert loop.phase == BARRIER_PHASE and loop.eta_hat == cap
+    assert w == pytest.approx(-(0.009 ** R1) - cap)
+    # ... and after a fallback the integral resumes from the cap, not from beyond it.
+    loop.step(0.5, 0.0, DT)
+    assert loop.phase == INTEGRAL_PHASE and loop.eta_hat == cap
+
+
+def test_profile_options_are_validated_with_their_names():
+    with pytest.raises(ParameterError, match=r"outer.linear_zone = 0.5 m: must be < outer.xi"):
+        OuterLoopGains(linear_zone=0.5)
+    with pytest.raises(ParameterError, match=r"outer.linear_zone = -0.1 m: must be >= 0"):
+        OuterLoopGains(linear_zone=-0.1)
+    with pytest.raises(ParameterError, match=r"inner.boundary_layer = nan rad"):
+        InnerLoopGains(boundary_layer=math.nan)
+    with pytest.raises(ParameterError, match=r"inner.eta_max = -1 rad/s: must be >= 0"):
+        InnerLoopGains(eta_max=-1)
+    with pytest.raises(ParameterError, match=r"thetadot_source = 'model': must be one of"):
+        DlsmcConfig(thetadot_source="model")
+    with pytest.raises(ParameterError, match=r"thetadot_filter = 0.02 s: must be 0 with"):
+        DlsmcConfig(thetadot_source="analytic", thetadot_filter=0.02)
+    with pytest.raises(ParameterError, match="batch simulator implements the paper's law only"):
+        simulate_batch(robot_params().dlsmc, make_trajectory("sine"), [(1.0, 4.0, 0.0)], 1.0)
+
+
+# -- the analytic thetadot_d ------------------------------------------------------------
+
+
+def test_input_rate_is_the_time_derivative_of_the_outer_law():
+    # Drive the outer loop along a smooth error path inside and outside the linear zone and
+    # compare (u_x', u_y') with a central difference of the law's own output.
+    loop = BtintsmcOuterLoop(OuterLoopGains(linear_zone=0.02, C1=0.5, C2=0.7, k2=1.5, h=2.0))
+    dt = 1e-5
+    t = np.arange(0.0, 2.0, dt)
+    e_x, e_y = 0.04 * np.cos(3.0 * t), 0.3 * np.exp(-t) - 0.05
+    xdot_d, ydot_d = 0.5 + 0.1 * np.sin(t), 0.2 * np.cos(2.0 * t)
+    edot_x, edot_y = -0.12 * np.sin(3.0 * t), -0.3 * np.exp(-t)
+    xdd, ydd = 0.1 * np.cos(t), -0.4 * np.sin(2.0 * t)
+    u = np.array([loop.step(a, b, c, d, dt) for a, b, c, d in zip(e_x, e_y, xdot_d, ydot_d)])
+    loop.reset()
+    rates = []
+    for k in range(len(t)):
+        loop.step(e_x[k], e_y[k], xdot_d[k], ydot_d[k], dt)
+        rates.append(loop.input_rate(edot_x[k], edot_y[k], xdd[k], ydd[k]))
+    rates = np.array(rates)
+    numeric = (u[2:] - u[:-2]) / (2 * dt)
+    # Away from the first steps (s(0) = 0 starts the integral) and from the kinks of alpha
+    # at the edges of the linear zone (its slope jumps there), they agree to 1e-3 m/s^2.
+    smooth = ((np.abs(np.abs(e_x) - 0.02) > 1e-4) & (np.abs(np.abs(e_y) - 0.02) > 1e-4))[1:-1]
+    smooth[:999] = False
+    assert smooth.mean() > 0.95
+    np.testing.assert_allclose(rates[1:-1][smooth], numeric[smooth], atol=1e-3)
+    assert np.max(np.abs(rates[1:-1][smooth])) > 0.1  # the comparison is not all zeros
+
+
+def test_analytic_thetadot_d_matches_the_rate_of_theta_d_in_closed_loop():
+    params = robot_params()
+    run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 4.0, 0.0), 30.0)
+    theta_d = np.unwrap(run.telemetry["theta_d"])
+    numeric = np.gradient(theta_d, DT)
+    analytic = run.telemetry["thetadot_d"]
+    window = run.t >= 10.0  # converged and smooth
+    np.testing.assert_allclose(analytic[window][1:-1], numeric[window][1:-1], atol=2e-3)
+    assert np.ptp(analytic[window]) > 0.1  # the sine makes theta_d turn
+
+
+# -- the profile in closed loop on the kinematic model ----------------------------------
+
+
+def test_robot_profile_meets_its_kinematic_targets_in_case1():
+    params = robot_params()
+    m = simulation_metrics(simulate(DlsmcController(params.dlsmc), params.trajectory,
+                                    (1.0, 4.0, 0.0), 100.0))
+    assert m.iae == pytest.approx(13.5757, rel=0.03)  # Table 2
+    assert m.t_conv <= 8.0
+    assert m.hold_omega_tv <= 0.1
+    assert m.hold_omega_saturated == 0.0
+    assert m.hold_theta_e_max < 1e-3
+
+
+def test_paper_law_chatters_where_the_profile_does_not():
+    # The same start on the paper's law: omega alternates limit to limit once converged.
+    m = simulation_metrics(simulate(DlsmcController(), make_trajectory("sine"),
+                                    (1.0, 4.0, 0.0), 30.0))
+    assert m.hold_omega_tv > 100.0 and m.hold_omega_saturated > 0.1
+
+
+@pytest.mark.parametrize("name, x0", [("circle", (0.5, -0.5, 0.0)), ("line", (-1.0, 1.0, 1.0)),
+                                      ("lemniscate", (1.0, -1.0, 0.5)), ("sine", (4.0, 1.0, 0.0))])
+def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
+    params = robot_params()
+    assert name in TRAJECTORY_TYPES
+    m = simulation_metrics(simulate(DlsmcController(params.dlsmc), make_trajectory(name), x0,
+                                    60.0), hold_from=30.0)
+    assert m.t_conv_1cm is not None and m.t_conv_1cm < 30.0
+    assert m.hold_distance_max < 1e-3
+    assert m.hold_theta_e_max < 1e-3
+    assert m.hold_omega_tv < 0.1 and m.hold_omega_saturated == 0.0
