@@ -6,7 +6,8 @@
   over the same poses;
 - pybullet chassis world under a constant command (what a lockstep step costs apart from
   waiting for the command): real-time factor and microseconds per physics step;
-- pybullet closed loop, lockstep in one process (world + controller session per step);
+- pybullet closed loop of the robot profile (``config/robot_case1.yaml``), lockstep in one
+  process (the in-process plant of ``nfmr-eval --plant pybullet``);
 - batch kinematic closed loop: robot-steps per second for 500 robots in one process and
   4000 robots shared by all cores;
 - with ``--nodes``: the controller node's 1 kHz loop against a plain rclpy 1 ms timer,
@@ -16,9 +17,7 @@
 import argparse
 import json
 import os
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -83,31 +82,20 @@ def sim_world_rtf(sim_seconds: float) -> dict:
 
 
 def pybullet_closed_loop_rtf(sim_seconds: float) -> dict:
-    """The DLSMC driving the pybullet chassis step by step in one process (paper Case 1)."""
-    from nfmr_dlsmc.params import controller_params, load_params_file
-    from nfmr_dlsmc.tracking_session import TrackingSession
+    """The robot profile (``config/robot_case1.yaml``, Case 1) driving the pybullet chassis
+    in one process, lockstep: :func:`~nfmr_dlsmc.pybullet_plant.simulate_pybullet`."""
+    from nfmr_dlsmc.params import controller_params, load_params_file, shipped_config
+    from nfmr_dlsmc.pybullet_plant import simulate_pybullet
     from nfmr_sim.sim_params import sim_settings
-    from nfmr_sim.world import ChassisWorld
 
-    config = Path(__file__).resolve().parents[1] / "config" / "paper_case1.yaml"
-    if not config.exists():
-        config = Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "paper_case1.yaml"
+    config = shipped_config("robot_case1.yaml")
     params = controller_params(load_params_file(config))
     settings = sim_settings(load_params_file(config, "sim"))
-    session = TrackingSession(params, odom_timeout=1e9)
-    steps = int(round(sim_seconds / settings.world.physics_dt))
-    with ChassisWorld(settings.world) as world:
-        world.reset(settings.initial_pose)
-        out = world.observe()
-        start = time.perf_counter()
-        for _ in range(steps):
-            p = out.odometry
-            session.on_odometry(p.x, p.y, p.yaw, 0.0, out.time)
-            tick = session.tick(out.time, 0.0)
-            world.set_wheel_commands(tick.steer, tick.wheel_speed)
-            out = world.step()
-        wall = time.perf_counter() - start
-    return {"sim_s": sim_seconds, "real_time_factor": sim_seconds / wall}
+    start = time.perf_counter()
+    simulate_pybullet(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
+                      sim_seconds, settings.world, params.geometry, params.steering)
+    wall = time.perf_counter() - start
+    return {"sim_s": sim_seconds, "wall_s": wall, "real_time_factor": sim_seconds / wall}
 
 
 def batch_robot_steps(n: int = 500, seconds: float = 10.0, jobs: int = 1) -> dict:
@@ -142,7 +130,7 @@ def main(argv=None) -> int:
     tick = controller_tick_us()
     print(f"pybullet chassis world, {args.sim_seconds:g} s ...", flush=True)
     world = sim_world_rtf(args.sim_seconds)
-    print("pybullet closed loop (lockstep, one process) ...", flush=True)
+    print("pybullet closed loop (robot profile, lockstep, one process) ...", flush=True)
     closed = pybullet_closed_loop_rtf(args.sim_seconds)
     jobs = os.cpu_count() or 1
     print(f"batch kinematic closed loop, 500 robots in one process and 4000 on {jobs} ...",
@@ -162,7 +150,8 @@ def main(argv=None) -> int:
               f"  p99 {figure['p99_us']:.2f}")
     print(f"{'pybullet world real-time factor [-]':<44} {world['real_time_factor']:>12.1f}  >= 5")
     print(f"{'pybullet world per physics step [us]':<44} {world['us_per_step']:>12.1f}")
-    print(f"{'pybullet closed loop real-time factor [-]':<44} {closed['real_time_factor']:>12.1f}  >= 5")
+    print(f"{'pybullet closed loop, robot profile, RTF [-]':<44} "
+          f"{closed['real_time_factor']:>12.1f}  >= 5")
     for key, label in (("one_process", "batch, 500 robots, 1 process"),
                        ("all_cores", f"batch, 4000 robots, {jobs} processes")):
         print(f"{label + ' [robot-steps/s]':<44} {batch[key]['robot_steps_per_s']:>12,.0f}"

@@ -26,12 +26,13 @@ from nfmr_dlsmc.bag_writer import BagWriter
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.metrics import HOLD_FROM, simulation_metrics
-from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
+from nfmr_dlsmc.params import (ParamsFileError, controller_params, load_params_file,
+                               shipped_config)
 from nfmr_dlsmc.pybullet_plant import simulate_pybullet
 from nfmr_dlsmc.recorder_node import RecorderNode
 from nfmr_dlsmc.bag_reader import read_bag
-from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, metrics_table, plot_runs, state_metrics,
-                                     state_series, steer_joint_rates)
+from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, STEER_FIELDS, metrics_table, plot_runs,
+                                     state_metrics, state_series, steer_joint_rates)
 from nfmr_dlsmc.validation import ParameterError
 from nfmr_sim.sim_params import sim_settings
 
@@ -65,14 +66,6 @@ class Child:
         """The last lines of its log."""
         text = self.log.read_text(errors="replace").splitlines()
         return "\n".join("    " + line for line in text[-lines:])
-
-
-def default_config() -> Path:
-    """``config/robot_case1.yaml`` here, else the installed copy."""
-    local = Path("config/robot_case1.yaml")
-    if local.exists():
-        return local
-    return Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / "robot_case1.yaml"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -144,7 +137,7 @@ def _raise_on_sigterm(signum, frame):
 
 
 def run(args) -> int:
-    config = args.config or default_config()
+    config = args.config or shipped_config("robot_case1.yaml")
     try:
         flat_controller = load_params_file(config, "controller")
         params = controller_params(flat_controller)
@@ -285,10 +278,12 @@ def report(bag_dir, run_dir, params, settings, args, counts) -> None:
                                          settings.initial_pose, args.duration, params.dlsmc.dt)))
         for label, sim in plants:
             columns.append((label, simulation_metrics(sim, args.hold_from)))
-            runs.append((label, {"t": sim.t, "x": sim.state[:, 0], "y": sim.state[:, 1],
-                                 "x_d": sim.reference[:, 0], "y_d": sim.reference[:, 1],
-                                 "theta_e": sim.telemetry["theta_e"], "v": sim.v,
-                                 "omega": sim.omega}))
+            plotted = {"t": sim.t, "x": sim.state[:, 0], "y": sim.state[:, 1],
+                       "x_d": sim.reference[:, 0], "y_d": sim.reference[:, 1],
+                       "theta_e": sim.telemetry["theta_e"], "v": sim.v, "omega": sim.omega}
+            if sim.steer is not None:
+                plotted.update(zip(STEER_FIELDS, sim.steer.T))
+            runs.append((label, plotted))
     plot_runs(runs, run_dir)
     print(metrics_table(columns))
     stopped = int(series["stopped"].sum())

@@ -18,6 +18,7 @@ Unknown names are errors, so a typo never silently leaves a default in place.
 """
 
 from dataclasses import dataclass, field, fields
+import sys
 from pathlib import Path
 
 import yaml
@@ -26,6 +27,15 @@ from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoop
 from nfmr_dlsmc.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
 from nfmr_dlsmc.validation import ParameterError, check_positive
+
+
+def shipped_config(name: str) -> Path:
+    """A parameter file shipped with the package: ``config/<name>`` of the source tree this
+    module lies in, else the installed ``share/nfmr_dlsmc/config/<name>``."""
+    local = Path(__file__).resolve().parents[1] / "config" / name
+    if local.exists():
+        return local
+    return Path(sys.prefix) / "share" / "nfmr_dlsmc" / "config" / name
 
 
 class ParamsFileError(ValueError):

@@ -109,7 +109,8 @@ def plot_runs(runs: list, out_dir: Path) -> list[Path]:
     ----------
     runs : list of (label, series)
         Each series a dict with at least t, x, y, x_d, y_d, theta_e, v, omega; the
-        reference is drawn from the first run.
+        reference is drawn from the first run. Series with steer_fl ... steer_rr add
+        ``steering.png``.
     out_dir : Path
     """
     out_dir = Path(out_dir)
@@ -157,6 +158,18 @@ def plot_runs(runs: list, out_dir: Path) -> list[Path]:
     for ax in axes:
         ax.legend()
     save(fig, "inputs.png")
+
+    with_steer = [(label, s) for label, s in runs if all(n in s for n in STEER_FIELDS)]
+    if with_steer:
+        fig, axes = plt.subplots(len(with_steer), 1, figsize=(8, 3 * len(with_steer)),
+                                 sharex=True, squeeze=False)
+        for ax, (label, s) in zip(axes[:, 0], with_steer):
+            for name in STEER_FIELDS:
+                ax.plot(s["t"], s[name], lw=0.8, label=name.removeprefix("steer_").upper())
+            ax.set(ylabel="steer angle [rad]", title=f"Commanded steer angles: {label}")
+            ax.legend(ncol=4)
+        axes[-1, 0].set_xlabel("t [s]")
+        save(fig, "steering.png")
     return paths
 
 
