@@ -126,8 +126,9 @@ class InnerLoopGains:
         layer that replaces sign(s_theta) in the eta_hat term of eq. (11) by
         sat(s_theta / phi).
     eta_max : float
-        Robot profile (0, no cap as in the paper, by default): upper bound [rad/s] on the
-        adaptive gain eta_hat in both phases; the integral of eq. (12) stops at it.
+        Robot profile (0, no cap as in the paper, by default): upper bound [rad/s] of the
+        integral phase of eta_hat, eq. (12), whose integral stops at it; the barrier phase,
+        eq. (13), is not capped.
     """
 
     prefix: ClassVar[str] = "inner"

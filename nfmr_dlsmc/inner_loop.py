@@ -41,9 +41,11 @@ class AbfsmcInnerLoop:
 
     - ``gains.boundary_layer`` = phi > 0 replaces sign(s) in the eta_hat term by
       sat(s / phi), so the switching term is continuous;
-    - ``gains.eta_max`` > 0 caps eta_hat in both phases; the integral of eq. (12) does not
-      grow beyond it. An unbounded eta_hat re-locks a lagging robot into a limit cycle after
-      every barrier fallback.
+    - ``gains.eta_max`` > 0 caps the integral phase: the integral of eq. (12) stops at it.
+      Unbounded, it winds up while a lagging robot cannot reach eps/2 and re-locks it into
+      a limit cycle after every barrier fallback. The barrier phase is not capped: its gain
+      growing towards |s| = eps is what holds the band against a disturbance larger than
+      the cap.
 
     Attributes (after a step)
     -------------------------
@@ -97,7 +99,7 @@ class AbfsmcInnerLoop:
             self.t_bar_reached = True
         integrating = self.phase == INTEGRAL_PHASE
         eta = self._eta_integral if integrating else g.lam * a / (g.eps - a)
-        capped = 0.0 < g.eta_max <= eta
+        capped = integrating and 0.0 < g.eta_max <= eta
         if capped:
             eta = g.eta_max
         self.eta_hat = eta

@@ -157,7 +157,8 @@ def parameter_descriptions() -> dict:
         "inner.anti_windup": "hold the eq. 12 integral while omega saturates (not in the paper)",
         "inner.boundary_layer": "width of sat(s/phi) replacing sign(s) in the eta_hat term "
                                 "[rad] (>= 0; 0: the paper's sign)",
-        "inner.eta_max": "cap on eta_hat [rad/s] (>= 0; 0: no cap, the paper)",
+        "inner.eta_max": "cap on the integral phase of eta_hat, eq. 12 [rad/s] (>= 0; 0: no "
+                         "cap, the paper)",
         "limits.v_min": "least linear speed [m/s] (> 0)",
         "limits.v_max": "largest linear speed [m/s] (> v_min)",
         "limits.omega_max": "largest |yaw rate| [rad/s] (> 0)",

@@ -23,6 +23,22 @@ def test_shipped_paper_file_is_the_paper_plus_two_robot_options(request):
         default.trajectory, default.steering, default.geometry)
 
 
+def test_robot_file_is_the_paper_gains_plus_the_four_robot_options(request):
+    paper = controller_params(load_params_file(request.config.rootpath / PAPER_FILE))
+    robot = controller_params(load_params_file(request.config.rootpath / "config/robot_case1.yaml"))
+    default = ControllerParams()
+    assert paper.dlsmc.is_paper_law and not robot.dlsmc.is_paper_law
+    assert robot.dlsmc.outer == replace(default.dlsmc.outer, linear_zone=0.02)
+    assert robot.dlsmc.inner == replace(default.dlsmc.inner, boundary_layer=0.02, eta_max=0.5)
+    assert robot.dlsmc.limits == default.dlsmc.limits and robot.dlsmc.dt == default.dlsmc.dt
+    assert (robot.dlsmc.thetadot_source, robot.dlsmc.thetadot_filter) == ("analytic", 0.0)
+    assert (robot.trajectory, robot.steering, robot.geometry) == (
+        paper.trajectory, paper.steering, paper.geometry)
+    both = [load_params_file(request.config.rootpath / f"config/{name}.yaml", "sim")
+            for name in ("paper_case1", "robot_case1")]
+    assert both[0] == both[1]  # the same simulated robot
+
+
 def test_nested_and_wildcard_sections_are_flattened(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("/**:\n  ros__parameters:\n    control_rate: 500.0\n"

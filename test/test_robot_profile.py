@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from nfmr_dlsmc.batch_sim import simulate_batch
+from nfmr_dlsmc.disturbances import paper_disturbance
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
 from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
@@ -94,7 +95,7 @@ def test_boundary_layer_replaces_sign_inside_the_layer_only():
     assert w == pytest.approx(0.1 + 0.004 ** R1 + barrier * 0.004 / phi)
 
 
-def test_eta_cap_bounds_both_phases_and_stops_the_integral():
+def test_eta_cap_stops_the_integral_phase_and_leaves_the_barrier():
     cap = 0.5
     loop = AbfsmcInnerLoop(InnerLoopGains(eta_max=cap))
     paper = AbfsmcInnerLoop(InnerLoopGains())
@@ -103,12 +104,13 @@ def test_eta_cap_bounds_both_phases_and_stops_the_integral():
         paper.step(1.0, 0.0, DT)
     assert paper.eta_hat == pytest.approx(2.2 * 1.999, rel=1e-6)
     assert loop.eta_hat == cap
-    # In the barrier phase near eps the barrier (9 rad/s at 0.9 eps) is capped too ...
+    # The barrier phase keeps its gain: 9 rad/s at |s| = 0.9 eps, far above the cap.
     loop.step(0.004, 0.0, DT)
     w = loop.step(0.009, 0.0, DT)
-    assert loop.phase == BARRIER_PHASE and loop.eta_hat == cap
-    assert w == pytest.approx(-(0.009 ** R1) - cap)
-    # ... and after a fallback the integral resumes from the cap, not from beyond it.
+    assert loop.phase == BARRIER_PHASE
+    assert loop.eta_hat == pytest.approx(1.0 * 0.009 / (0.01 - 0.009))
+    assert w == pytest.approx(-(0.009 ** R1) - loop.eta_hat)
+    # After a fallback the integral resumes from the cap, not from beyond it.
     loop.step(0.5, 0.0, DT)
     assert loop.phase == INTEGRAL_PHASE and loop.eta_hat == cap
 
@@ -203,3 +205,15 @@ def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
     assert m.hold_distance_max < 1e-3
     assert m.hold_theta_e_max < 1e-3
     assert m.hold_omega_tv < 0.1 and m.hold_omega_saturated == 0.0
+
+
+def test_robot_profile_holds_the_band_through_the_case2_pulse_on_the_kinematic_model():
+    params = robot_params()
+    run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 1.0, math.pi / 6),
+                   100.0, disturbance=paper_disturbance())
+    after_return = run.t >= 20.0  # the return ends at ~9 s (1 cm), the tail by ~15 s (1 mm)
+    theta_e = np.abs(run.telemetry["theta_e"])
+    assert theta_e[after_return].max() <= 0.01  # eps, the 50 s pulse included
+    assert np.abs(run.omega[after_return]).max() < 1.59
+    late = run.t >= 51.5  # 1 s after the pulse ended
+    assert run.distance_error[late].max() <= 1e-3
