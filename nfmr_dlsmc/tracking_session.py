@@ -66,16 +66,29 @@ class TrackingSession:
     max_jump : float
         Largest accepted change of position between two odometry messages [m].
     restart_threshold : float
-        A stamp this much older than the last one [s] means the source restarted.
+        Stamps this much older [s] than the last accepted one mean the source restarted;
+        this much newer, a gap in the source. Either way the stamps are off the current
+        time base, and they are taken as the new base only once ``confirm_messages``
+        messages in a row continue from it (each within ``restart_threshold`` of the one
+        before); until then each such message stops the robot for its tick and is not used,
+        so a single stamp far in the future or the past changes nothing.
+    confirm_messages : int
+        How many messages in a row establish a new time base (>= 1).
     """
 
     def __init__(self, params: ControllerParams, odom_timeout: float, odom_frame: str = "odom",
-                 max_jump: float = 10.0, restart_threshold: float = 1.0):
+                 max_jump: float = 10.0, restart_threshold: float = 1.0,
+                 confirm_messages: int = 3):
         self.params = params
         self.odom_timeout = odom_timeout
         self.odom_frame = odom_frame
         self.max_jump = max_jump
         self.restart_threshold = restart_threshold
+        if isinstance(confirm_messages, bool) or not isinstance(confirm_messages, int) \
+                or confirm_messages < 1:
+            raise ValueError(f"confirm_messages = {confirm_messages!r}: must be an integer >= 1")
+        self.confirm_messages = confirm_messages
+        self._new_base = []  # (stamp, control time) [s] of messages off the time base
         self.controller = DlsmcController(params.dlsmc)
         self._pose = None  # latest valid (x, y, theta)
         self._pose_wall = None  # wall time [s] it arrived
@@ -107,7 +120,8 @@ class TrackingSession:
         Returns
         -------
         bool
-            Whether to tick on it: False only for an out-of-order message, which is ignored.
+            Whether to tick on it: False only for an out-of-order message (older than the
+            last accepted one by less than ``restart_threshold``), which is ignored.
         """
         stamp = control_time if stamp is None else stamp
         if frame_id is not None and frame_id != self.odom_frame:
@@ -117,9 +131,22 @@ class TrackingSession:
         if not all(math.isfinite(v) for v in (x, y, theta, stamp)):
             self._bad_odometry = ("finite", f"odometry is not finite: ({x}, {y}, {theta})")
             return True
-        if self._stamp is not None and stamp < self._stamp:
-            if self._stamp - stamp < self.restart_threshold:
+        restarting = False
+        if self._stamp is not None:
+            gap = stamp - self._stamp
+            if -self.restart_threshold < gap < 0.0:
                 return False  # out of order: ignore
+            if abs(gap) >= self.restart_threshold:
+                if not self._confirms_new_base(stamp, control_time):
+                    self._bad_odometry = ("stamp", f"odometry stamp {stamp:.3f} s is {gap:+.3f} s "
+                                                   "from the last accepted one: ignored until "
+                                                   f"{self.confirm_messages} messages in a row "
+                                                   "confirm a new time base")
+                    return True
+                restarting = gap < 0.0
+                control_time = self._new_base[0][1]
+            self._new_base = []
+        if restarting:
             self._restart()
         elif self._pose is not None:
             jump = math.hypot(x - self._pose[0], y - self._pose[1])
@@ -134,6 +161,14 @@ class TrackingSession:
         if self._t0 is None:
             self._t0 = control_time
         return True
+
+    def _confirms_new_base(self, stamp: float, control_time: float) -> bool:
+        """Collect a message off the time base; True once enough continue the same base."""
+        base = self._new_base
+        if base and not 0.0 <= stamp - base[-1][0] < self.restart_threshold:
+            base.clear()  # not the same new base: start collecting again
+        base.append((stamp, control_time))
+        return len(base) >= self.confirm_messages
 
     def _restart(self) -> None:
         """The odometry source started over: so does tracking."""

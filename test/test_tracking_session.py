@@ -65,16 +65,52 @@ def test_out_of_order_odometry_is_ignored():
     assert out.state[STATE_FIELDS.index("x")] == 1.0  # the late message was not used
 
 
-def test_a_restarted_source_starts_tracking_over():
+def test_a_restarted_source_starts_tracking_over_once_its_stamps_confirm_it():
     s = session()
     for k in range(3000):
         feed(s, 1.0 + 0.0001 * k, 4.0, k * 0.001)
     assert s.controller.outer.s_x != 0.0
-    accepted, out = feed(s, 1.0, 4.0, 0.0, wall=3.0)  # stamps back to 0: a new run
-    assert accepted and not out.stopped
-    assert out.state[T_INDEX] == 0.0
-    assert s.controller.outer.s_x == 0.0 and s.restarts == 1
+    # Stamps back to 0: a new run, taken as such once three messages in a row say so.
+    reports = []
+    for k in range(2):
+        accepted, out = feed(s, 1.0, 4.0, k * 0.001, wall=3.0 + k * 0.001)
+        assert accepted and out.stopped and s.restarts == 0
+        reports.append(out.report)
+    assert "ignored until 3 messages in a row confirm a new time base" in reports[0]
+    accepted, out = feed(s, 1.0, 4.0, 0.002, wall=3.002)
+    assert accepted and not out.stopped and s.restarts == 1
+    assert out.state[T_INDEX] == pytest.approx(0.002)  # trajectory time from the new first stamp
     assert "starts over" in out.report
+    assert s.controller.outer.s_x == 0.0  # e(0) of the new run: its first tracked tick
+
+
+@pytest.mark.parametrize("outlier", [1000.0, -1000.0, 2.5])
+def test_a_single_stamp_far_off_changes_nothing(outlier):
+    s = session()
+    for k in range(100):
+        feed(s, 1.0, 4.0, k * 0.001)
+    accepted, out = feed(s, 1.0, 4.0, 0.1 + outlier)
+    assert accepted and out.stopped and "from the last accepted one" in out.report
+    _, out = feed(s, 1.0, 4.0, 0.1)  # the genuine stream goes on
+    assert not out.stopped and s.restarts == 0
+    assert out.state[T_INDEX] == pytest.approx(0.1)
+
+
+def test_outliers_that_do_not_continue_each_other_never_confirm_a_base():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    for k, stamp in enumerate((500.0, 900.0, 20.0, 700.0, 3000.0)):
+        accepted, out = feed(s, 1.0, 4.0, stamp, wall=0.001 * (k + 1))
+        assert out.stopped
+    assert s.restarts == 0 and feed(s, 1.0, 4.0, 0.006, wall=0.006)[1].stopped is False
+
+
+def test_a_gap_forward_is_taken_once_the_stamps_continue_from_it():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    outs = [feed(s, 1.0, 4.0, 5.0 + 0.001 * k, wall=0.001 * (k + 1))[1] for k in range(4)]
+    assert [o.stopped for o in outs] == [True, True, False, False]
+    assert s.restarts == 0 and outs[-1].state[T_INDEX] == pytest.approx(5.003)
 
 
 def test_stale_odometry_stops_and_fresh_odometry_resumes():
