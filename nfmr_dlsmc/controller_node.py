@@ -13,7 +13,6 @@ thread that sleeps to absolute deadlines at ``control_rate`` on the node clock (
 clock, or the sim's ``/clock`` under ``use_sim_time``).
 """
 
-import math
 import sys
 import threading
 import time
@@ -27,6 +26,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+from nfmr_dlsmc.angles import yaw_from_quaternion
 from nfmr_dlsmc.loop_stats import LoopStats
 from nfmr_dlsmc.params import (controller_parameter_defaults, controller_params,
                                parameter_descriptions)
@@ -51,10 +51,6 @@ def _session_options(values: dict) -> dict:
             "max_jump": check_positive("max_odom_jump", values["max_odom_jump"], "m"),
             "restart_threshold": check_positive("restart_threshold",
                                                 values["restart_threshold"], "s")}
-
-
-def _yaw(q) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 class ControllerNode(Node):
@@ -120,7 +116,9 @@ class ControllerNode(Node):
         by_odom = self._values["tick_source"] == "odom"
         with self._lock:
             accepted = self.session.on_odometry(
-                p.position.x, p.position.y, _yaw(p.orientation), wall,
+                p.position.x, p.position.y,
+                yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
+                                    p.orientation.w), wall,
                 stamp if by_odom else self._now(), stamp, msg.header.frame_id)
         if by_odom and accepted:
             self._tick(stamp)

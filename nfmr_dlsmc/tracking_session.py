@@ -129,7 +129,8 @@ class TrackingSession:
                                            f"expected {self.odom_frame!r}")
             return True
         if not all(math.isfinite(v) for v in (x, y, theta, stamp)):
-            self._bad_odometry = ("finite", f"odometry is not finite: ({x}, {y}, {theta})")
+            self._bad_odometry = ("finite", f"odometry is not finite or its orientation is no "
+                                            f"rotation: x, y, yaw = ({x}, {y}, {theta})")
             return True
         restarting = False
         if self._stamp is not None:
