@@ -9,6 +9,7 @@ The last line printed is the bag directory.
 
 import argparse
 import ctypes
+import math
 import os
 import signal
 import subprocess
@@ -83,6 +84,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI")
     parser.add_argument("--hold-from", type=float, default=HOLD_FROM, metavar="SECONDS",
                         help=f"start of the window of the hold figures [s] (default {HOLD_FROM:g})")
+    parser.add_argument("--stall-timeout", type=float, default=30.0, metavar="SECONDS",
+                        help="stop the run when simulated time has not advanced for this "
+                             "long (wall clock) [s] (default 30)")
     parser.add_argument("--no-compare", action="store_true",
                         help="skip the in-process pybullet and kinematic runs of the end table")
     return parser
@@ -151,6 +155,14 @@ def run(args) -> int:
     if not args.hold_from >= 0.0:
         print(f"nfmr-run: error: --hold-from must be >= 0, got {args.hold_from}", file=sys.stderr)
         return 2
+    if not args.stall_timeout > 0.0:
+        print(f"nfmr-run: error: --stall-timeout must be > 0, got {args.stall_timeout}",
+              file=sys.stderr)
+        return 2
+    mismatch = robot_mismatch(params, settings)
+    if mismatch:
+        print(f"nfmr-run: error: {config}: {mismatch}", file=sys.stderr)
+        return 2
     run_dir = new_run_dir(args.out, config)
     bag_dir = run_dir / "bag"
     print(f"run folder {run_dir}", file=sys.stderr)
@@ -181,7 +193,7 @@ def run(args) -> int:
             ctrl_args += ["-p", f"odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}"]
         children = [start_child("sim", "nfmr_sim.sim_node", sim_args, run_dir),
                     start_child("controller", "nfmr_dlsmc.controller_node", ctrl_args, run_dir)]
-        wait_for_run(children, clock, args.duration)
+        wait_for_run(children, clock, args.duration, args.stall_timeout)
         clock.spin(1.0)  # the sim has stopped stepping: let its last messages arrive
     except KeyboardInterrupt:
         interrupted = True
@@ -235,9 +247,30 @@ class ClockWatch:
             self.spin(quiet)
 
 
-def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
-    """Spin until the sim reaches ``duration``, showing progress; raise if a child dies."""
+def robot_mismatch(params, settings) -> str | None:
+    """Why the controller's robot and the simulated one differ, or None: the same steering
+    mode (j1, j2) and the same geometry, or the wheel mapping drives another robot."""
+    mode = settings.world.steer_mode
+    if (params.steering.j1, params.steering.j2) != (mode.j1, mode.j2):
+        return (f"controller steering (j1, j2) = ({params.steering.j1:g}, "
+                f"{params.steering.j2:g}) but sim steering (j1, j2) = ({mode.j1:g}, "
+                f"{mode.j2:g}): they must match")
+    chassis, geometry = settings.world.chassis, params.geometry
+    for name in ("wheelbase", "track", "wheel_radius"):
+        ours, sims = getattr(geometry, name), getattr(chassis, name)
+        if abs(ours - sims) > 1e-9:
+            return (f"controller geometry.{name} = {ours:g} m but sim chassis.{name} = "
+                    f"{sims:g} m: they must match")
+    return None
+
+
+def wait_for_run(children: list, clock: ClockWatch, duration: float,
+                 stall_timeout: float = math.inf) -> None:
+    """Spin until the sim reaches ``duration``, showing progress; raise :class:`RunError` if
+    a child dies or simulated time stands still for ``stall_timeout`` [s, wall clock]
+    (counted from the start, so it also covers a sim that never starts stepping)."""
     last_print = 0.0
+    last_progress, progress_time = clock.started, -1.0
     while True:
         clock.spin(0.05)
         for child in children:
@@ -247,6 +280,14 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float) -> None:
                                f"{child.log}:\n{child.tail()}")
         now = time.monotonic()
         sim_t = clock.sim_time
+        if sim_t != progress_time:
+            last_progress, progress_time = now, sim_t
+        elif clock.recorder is not None and now - last_progress > stall_timeout:
+            sim = children[0]
+            raise RunError(f"the run stalled: simulated time has stayed at {sim_t:.3f} s for "
+                           f"{now - last_progress:.1f} s (--stall-timeout {stall_timeout:g} s); "
+                           f"the {sim.name} process stopped stepping; last lines of "
+                           f"{sim.log}:\n{sim.tail()}")
         if now - last_print > 0.5 or sim_t >= duration:
             wall = now - clock.started
             print(f"\rsim {sim_t:7.2f} / {duration:g} s   real-time factor "

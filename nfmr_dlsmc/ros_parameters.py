@@ -27,7 +27,9 @@ def declare_parameters(node: Node, defaults: dict, read_only=(), descriptions=No
 
     ``descriptions`` (name -> text) fill the descriptors that ``ros2 param describe`` shows.
 
-    Parameters given in a ``--params-file`` override the defaults; a value of the wrong
+    Parameters given in a ``--params-file`` override the defaults; an integer given for a
+    floating-point parameter (``k1: 1``, ``initial_pose: [1, 4, 0]``) is taken as that
+    number, as the parameter-file check of ``nfmr-run`` takes it; a value of another wrong
     type, or a name the node does not know, raises :class:`ParameterError` naming it.
     """
     for name in node._parameter_overrides:  # names set by --params-file / -p
@@ -42,14 +44,28 @@ def declare_parameters(node: Node, defaults: dict, read_only=(), descriptions=No
                                          read_only=name in read_only)
         # An empty list carries no element type: declare those by type alone.
         initial = ptype if isinstance(default, (list, tuple)) and not default else default
+        given = node._parameter_overrides.get(name)
+        widened = None if given is None else _widened(given.value, ptype)
         try:
-            param = node.declare_parameter(name, initial, descriptor)
+            if widened is None:
+                param = node.declare_parameter(name, initial, descriptor)
+            else:
+                param = node.declare_parameter(name, widened, descriptor, ignore_override=True)
         except (InvalidParameterTypeException, ParameterException) as exc:
-            given = node._parameter_overrides.get(name)
             shown = given.value if given is not None else None
             raise ParameterError(name, shown, f"must be of type {ptype.name.lower()} ({exc})") from None
         values[name] = _plain(param.value, default)
     return values
+
+
+def _widened(value, ptype):
+    """An integer (array) given for a double (array) parameter as floats; else None."""
+    if ptype == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if ptype == Parameter.Type.DOUBLE_ARRAY and isinstance(value, (list, tuple)) and value \
+            and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        return [float(v) for v in value]
+    return None
 
 
 def _plain(value, default):

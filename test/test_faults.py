@@ -64,6 +64,25 @@ def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child, mod
     assert "Traceback" not in (bag.parent / f"{survivor}.log").read_text()
 
 
+def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
+    proc = start_run(tmp_path, "--duration", "60", "--stall-timeout", "3")
+    try:
+        sim = wait_for_child(proc, "nfmr_sim.sim_node")
+        time.sleep(5.0)
+        os.kill(sim, signal.SIGSTOP)  # alive, but no step and no /clock any more
+        stopped_at = time.monotonic()
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 1
+    assert "the run stalled" in stderr and "the sim process stopped stepping" in stderr
+    assert 3.0 <= time.monotonic() - stopped_at < 3.0 + 15.0  # detection, then stopping
+    assert gone(sim)
+    with Reader(Path(stdout.strip().splitlines()[-1])) as reader:  # finished and readable
+        assert reader.message_count > 0
+
+
 def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     proc = start_run(tmp_path, "--duration", "60")
     kids = [wait_for_child(proc, "nfmr_sim.sim_node"),

@@ -1,5 +1,6 @@
 """Bad parameter files stop the node processes with a named error and exit code 2."""
 
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -13,8 +14,8 @@ CASES = [
      "YAML syntax error at line 4"),
     ("unknown", "controller:\n  ros__parameters:\n    outer: {C9: 1.0}\n",
      "outer.C9 = 1.0: unknown parameter"),
-    ("wrong type", "controller:\n  ros__parameters:\n    inner: {eps: 1}\n",
-     "inner.eps = 1: must be of type double"),
+    ("wrong type", "controller:\n  ros__parameters:\n    inner: {eps: true}\n",
+     "inner.eps = True: must be of type double"),
     ("out of range", "controller:\n  ros__parameters:\n    limits: {v_min: -0.2}\n",
      "limits.v_min = -0.2 m/s: must be > 0"),
     ("even p", "controller:\n  ros__parameters:\n    outer: {p3: 34}\n",
@@ -61,3 +62,22 @@ def test_missing_parameter_file_and_bad_ros_arguments(tmp_path):
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "cannot start" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_integers_for_floating_point_parameters_are_taken_as_numbers(tmp_path):
+    # Users write `k1: 1`: the nodes take it as nfmr-run's and nfmr-eval's check does.
+    path = tmp_path / "params.yaml"
+    path.write_text("controller:\n  ros__parameters:\n    inner: {k1: 2, eps: 1}\n"
+                    "    limits: {v_max: 3}\n"
+                    "sim:\n  ros__parameters:\n    initial_pose: [1, 4, 0]\n"
+                    "    motors: {rated_torque: 20}\n")
+    for node, needle in (("controller", "inner.k1"), ("sim", "initial_pose")):
+        proc = subprocess.Popen([str(BIN / node), "--ros-args", "--params-file", str(path)],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            out, _ = proc.communicate(timeout=4)
+        except subprocess.TimeoutExpired:  # still running: it accepted the file
+            proc.send_signal(signal.SIGINT)
+            out, _ = proc.communicate(timeout=10)
+        assert "must be of type" not in out and needle not in out, out
+        assert proc.returncode in (0, -signal.SIGINT, 130), out

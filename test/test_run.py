@@ -157,3 +157,20 @@ def test_the_ros_run_agrees_with_the_same_run_in_one_process(short_run):
     (ros_iae, in_process_iae, _), (ros_ise, in_process_ise, _) = rows.values()
     assert float(ros_iae) == pytest.approx(float(in_process_iae), rel=0.01)
     assert float(ros_ise) == pytest.approx(float(in_process_ise), rel=0.02)
+
+
+@pytest.mark.parametrize("section, text, needle", [
+    ("sim", "steering: {j1: 0.0, j2: 1.0}",
+     "controller steering (j1, j2) = (1, 0) but sim steering (j1, j2) = (0, 1)"),
+    ("sim", "chassis: {wheelbase: 1.2}",
+     "controller geometry.wheelbase = 0.89 m but sim chassis.wheelbase = 1.2 m"),
+])
+def test_a_controller_and_sim_for_different_robots_are_refused_before_starting(
+        tmp_path, section, text, needle):
+    base = (Path(__file__).parents[1] / "config" / "robot_case1.yaml").read_text()
+    config = tmp_path / "mismatch.yaml"
+    config.write_text(base + f"\n/{section}:\n  ros__parameters:\n    {text}\n")
+    proc = start_run(tmp_path, str(config))
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 2 and needle in stderr, stderr
+    assert not (tmp_path / "runs").exists() and not list(tmp_path.glob("*_mismatch"))
