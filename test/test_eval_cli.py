@@ -60,6 +60,11 @@ def test_table_shows_paper_column_for_case1_only():
     (["--controller", "lqr"], "--controller"),
     (["--disturbance", "wind"], "--disturbance"),
     (["--params", "/nonexistent/p.yaml"], "/nonexistent/p.yaml"),
+    (["--duration", "0.0004"], "shorter than one control period"),
+    (["--duration", "1e9"], "GiB of memory"),
+    (["--gains", "config/comparison.yaml"], "the DLSMC's gains come from --params"),
+    (["--hold-from", "-1"], "--hold-from"),
+    (["--plant", "gazebo"], "--plant"),
 ])
 def test_invalid_arguments_exit_2_with_one_line(args, needle):
     proc = run_eval(*args)
@@ -113,3 +118,22 @@ def test_a_bad_comparison_gains_file_is_named(tmp_path):
     proc = run_eval("--controller", "kanayama", "--gains", str(gains))
     assert proc.returncode == 2
     assert "kanayama.k_y = 0" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_json_is_strict_json_with_null_for_what_does_not_apply():
+    # Kanayama's law has no theta_d: its theta_e figures are null, never NaN or Infinity.
+    proc = run_eval("--controller", "kanayama", "--duration", "20", "--json")
+    assert proc.returncode == 0, proc.stderr
+    line = proc.stdout.strip().splitlines()[-1]
+    result = json.loads(line, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert result["theta_e_iae"] is None and result["hold_theta_e_p99"] is None
+    assert result["hold_from"] == 15.0 and result["scenario"]["plant"] == "kinematic"
+    assert all(len(repr(v)) < 20 for v in result.values() if isinstance(v, float))
+
+
+def test_a_closed_stdout_ends_quietly():
+    proc = subprocess.Popen([sys.executable, "-m", "nfmr_dlsmc.eval_cli", "--duration", "5"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # like `| head -0`
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and b"Traceback" not in stderr, stderr
