@@ -1,19 +1,22 @@
 """``nfmr-compare``: every controller on the paper's comparison scenarios -> a report
-folder with ``report.md`` (Tables 2-4 beside the paper's values), the figures of
-section 4.2 as PNG files and ``results.json``."""
+folder with ``report.md`` (Tables 2-4 beside the paper's values, the figures of holding
+the path), the figures of section 4.2 as PNG files and ``results.json``; on the kinematic
+model (3) or the pybullet chassis."""
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from nfmr_dlsmc.comparison_metrics import run_metrics
-from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, SCENARIOS, run_scenario
+from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS, SCENARIOS, run_scenario
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
 from nfmr_dlsmc.gains import InputLimits
@@ -52,30 +55,46 @@ def plot_series(result) -> dict:
 
 
 def run_task(task: tuple) -> tuple:
-    """One run in a worker: (key, name, block, scenario) -> (key, metrics, series)."""
-    key, name, block, scenario = task
-    result = run_scenario(name, block, scenario)
+    """One run in a worker: (key, name, block, scenario, plant) -> (key, metrics, series)."""
+    key, name, block, scenario, plant = task
+    result = run_scenario(name, block, scenario, plant)
     pulses = [p.start for p in scenario.disturbance.pulses]
     metrics = run_metrics(result, InputLimits().omega_max, pulses)
     return key, metrics, plot_series(result)
 
 
-def comparison_tasks(names, blocks: dict) -> list[tuple]:
-    """Every (scenario, controller) run, then the DLSMC C1:C2 runs of Fig. 13."""
-    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s)
-             for s in SCENARIOS for name in names]
+def comparison_tasks(names, blocks: dict, plant: str = "kinematic",
+                     duration: float = CASE1_LONGITUDINAL.duration) -> list[tuple]:
+    """Every (scenario, controller) run of ``duration`` [s] on ``plant``, then on the
+    kinematic plant the DLSMC C1:C2 runs of Fig. 13 (the paper's kinematic figure; left
+    out on pybullet)."""
+    scenarios = [replace(s, duration=duration) for s in SCENARIOS]
+    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant)
+             for s in scenarios for name in names]
+    if plant != "kinematic":
+        return tasks
     base = blocks.get("dlsmc") or {}
+    longitudinal = replace(CASE1_LONGITUDINAL, duration=duration)
     for c1, c2 in C_RATIOS:
         outer = {**(base.get("outer") or {}), "C1": c1, "C2": c2}
-        tasks.append((("c_ratio", CASE1_LONGITUDINAL.start_key, f"{c1:g}:{c2:g}"), "dlsmc",
-                      {**base, "outer": outer}, CASE1_LONGITUDINAL))
+        tasks.append((("c_ratio", longitudinal.start_key, f"{c1:g}:{c2:g}"), "dlsmc",
+                      {**base, "outer": outer}, longitudinal, plant))
     return tasks
 
 
+def quiet_stdout() -> None:
+    """Point this process's file descriptor 1 at /dev/null: a worker's pybullet prints its
+    build time and argv on stdout, where ``nfmr-compare`` prints only the report folder."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
+
+
 def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
-    """Run ``tasks`` on ``jobs`` processes; metrics and series keyed by task key."""
+    """Run ``tasks`` on ``jobs`` processes (their stdout silenced, see :func:`quiet_stdout`);
+    metrics and series keyed by task key."""
     metrics, series = {}, {}
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, initializer=quiet_stdout) as pool:
         futures = [pool.submit(run_task, task) for task in tasks]
         for done, future in enumerate(as_completed(futures), 1):
             key, run_metrics_, run_series = future.result()
@@ -85,19 +104,43 @@ def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
     return metrics, series
 
 
-def results_document(metrics: dict) -> dict:
-    """``results.json``: case -> start -> controller -> metrics (the C1:C2 runs under
-    ``c_ratio`` -> start -> "C1:C2")."""
-    document = {}
+def results_document(metrics: dict, plant: str) -> dict:
+    """``results.json``: ``"plant"`` -> the plant's name, and case -> start -> controller ->
+    metrics (the C1:C2 runs under ``c_ratio`` -> start -> "C1:C2")."""
+    document = {"plant": plant}
     for (case, start, name), values in metrics.items():
         document.setdefault(case, {}).setdefault(start, {})[name] = values
     return document
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a bad argument in one line and exits 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _duration(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
+    parser = _OneLineParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=Path("report"),
                         help="report folder (default report/)")
+    parser.add_argument("--plant", choices=PLANTS, default="kinematic",
+                        help="kinematic: the unicycle model (3), as the paper (default); "
+                             "pybullet: the simulated 4WIS chassis, in-process, without the "
+                             "C1:C2 runs of Fig. 13")
+    parser.add_argument("--duration", type=_duration, default=CASE1_LONGITUDINAL.duration,
+                        help="length of every run [s] (default 100, the paper's; shorter "
+                             "for a quick look: the hold figures start at 15 s)")
     parser.add_argument("--gains", type=Path, default=None,
                         help="comparison gains file (default config/comparison.yaml)")
     parser.add_argument("--controllers", nargs="+", choices=CONTROLLER_NAMES,
@@ -124,23 +167,23 @@ def main(argv=None) -> int:
             build_controller(name, blocks.get(name))  # every gain checked before any run
     except ParameterError as exc:
         parser.error(str(exc))
-    tasks = comparison_tasks(names, blocks)
+    tasks = comparison_tasks(names, blocks, args.plant, args.duration)
     begin = time.perf_counter()
 
     def progress(done, total, key):
         print(f"\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  "
               f"{key[0]} {key[1]} {key[2]:<16}", end="", file=sys.stderr, flush=True)
 
-    print(f"nfmr-compare: {len(tasks)} runs of 100 s on {args.jobs} processes, "
-          f"gains from {gains_path}", file=sys.stderr)
+    print(f"nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} "
+          f"plant, {args.jobs} processes, gains from {gains_path}", file=sys.stderr)
     metrics, series = run_all(tasks, args.jobs, progress)
     print(file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
-    document = results_document(metrics)
+    document = results_document(metrics, args.plant)
     (args.out / "results.json").write_text(json.dumps(document, indent=1))
-    figures = write_figures(args.out, series, names)
+    figures = write_figures(args.out, series, names, args.plant)
     write_report(args.out / "report.md", document, figures, gains_path,
-                 time.perf_counter() - begin, len(tasks), args.jobs)
+                 time.perf_counter() - begin, len(tasks), args.jobs, duration=args.duration)
     print(f"wrote {args.out / 'report.md'}, {len(figures)} figures and results.json "
           f"in {time.perf_counter() - begin:.1f} s", file=sys.stderr)
     print(args.out)

@@ -19,12 +19,13 @@ COLORS = {
     "dlsmc": "#d62728", "pid": "#7f7f7f", "csmc": "#ff7f0e", "dsmc": "#8c564b",
     "dl_crsmc": "#2ca02c", "dntsmc": "#1f77b4", "btsmc_ntsmc": "#9467bd",
     "btintsmc_crsmc": "#17becf", "btintsmc_ntsmc": "#bcbd22", "pure_pursuit": "#e377c2",
-    "stanley": "#393b79", "kanayama": "#637939",
+    "stanley": "#393b79", "kanayama": "#637939", "dlsmc_robot": "#ff00ff",
 }
-#: The paper's Case 1 methods (Figs 8-12 leave out DSMC, which fails to reach the path).
-PAPER_CASE1 = ("pid", "csmc", "dl_crsmc", "dntsmc", "btsmc_ntsmc", "dlsmc")
-DOUBLE_LOOP = ("dl_crsmc", "dntsmc", "btsmc_ntsmc", "dlsmc")
-INNER_LOOP = ("btintsmc_crsmc", "btintsmc_ntsmc", "dlsmc")
+#: The paper's Case 1 methods (Figs 8-12 leave out DSMC, which fails to reach the path),
+#: each group with the DLSMC's robot profile beside the paper's DLSMC.
+PAPER_CASE1 = ("pid", "csmc", "dl_crsmc", "dntsmc", "btsmc_ntsmc", "dlsmc", "dlsmc_robot")
+DOUBLE_LOOP = ("dl_crsmc", "dntsmc", "btsmc_ntsmc", "dlsmc", "dlsmc_robot")
+INNER_LOOP = ("btintsmc_crsmc", "btintsmc_ntsmc", "dlsmc", "dlsmc_robot")
 #: Time span of the Case 1 time plots [s].
 CASE1_SPAN = 30.0
 
@@ -108,8 +109,9 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def write_figures(out: Path, series: dict, names) -> dict:
-    """Write every figure into ``out``; return figure id -> (file name, caption)."""
+def write_figures(out: Path, series: dict, names, plant: str = "kinematic") -> dict:
+    """Write every figure into ``out``; return figure id -> (file name, caption), each
+    caption naming the plant unless it is the paper's kinematic model."""
     names = list(names)
     omega_max = InputLimits().omega_max
     eps = InnerLoopGains().eps
@@ -121,7 +123,7 @@ def write_figures(out: Path, series: dict, names) -> dict:
     fig, axes = plt.subplots(2, 1, figsize=(10, 8))
     _paths(axes[0], _runs(series, CASE1_LATERAL, names), "(a) x0 = (4, 1, 0)", (-1, 25), (-3, 5))
     _paths(axes[1], case1, "(b) x0 = (1, 4, 0)", (-1, 25), (-3, 5))
-    axes[1].legend(fontsize=7, ncol=3, loc="lower right")
+    axes[0].legend(fontsize=7, ncol=3, loc="upper right")  # free of paths, unlike (b)
     figures["fig07"] = (_save(fig, out / "fig07_trajectories.png").name,
                         "Fig. 7: paths of every controller in Case 1, (a) large lateral and "
                         "(b) large longitudinal initial error; first 25 m of the sine.")
@@ -134,7 +136,7 @@ def write_figures(out: Path, series: dict, names) -> dict:
     figures["fig08"] = (_save(fig, out / "fig08_position_errors.png").name,
                         "Fig. 8: Case 1 (1, 4, 0), (a) longitudinal error x_e, (b) lateral "
                         "error y_e, (c) distance error, paper methods (DSMC left out as in "
-                        "the paper).")
+                        "the paper) and the DLSMC's robot profile.")
 
     fig = _heading_figure(case1_paper, CASE1_SPAN, (-math.pi, math.pi), (-2, 2))
     figures["fig09"] = (_save(fig, out / "fig09_theta_r.png").name,
@@ -196,8 +198,9 @@ def write_figures(out: Path, series: dict, names) -> dict:
         _paths(ax, case2_inner, "Case 2, x0 = (1, 1, pi/6)", (-1, 12), None)
         ax.legend(fontsize=8)
         figures["fig14"] = (_save(fig, out / "fig14_case2_paths.png").name,
-                            "Fig. 14: Case 2 paths with the BTINTSMC position loop and three "
-                            "attitude loops (paths that coincide hide one another).")
+                            "Fig. 14: Case 2 paths with the BTINTSMC position loop and the "
+                            "paper's three attitude loops, and the DLSMC's robot profile "
+                            "(paths that coincide hide one another).")
 
         fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
         runs = {n: dict(s, theta_wrapped=wrap_angles(s["theta"]),
@@ -227,9 +230,16 @@ def write_figures(out: Path, series: dict, names) -> dict:
                    (-2, 2))
         _limit_lines(axes[1], omega_max)
         axes[0].legend(fontsize=8, loc="lower right")
+        mean = ("the yaw rate the robot effectively gets" if plant == "kinematic" else
+                "which does not smooth a chattering omega here: the chassis turns through "
+                "rate-limited steer joints, and a switching omega becomes a limit cycle slower "
+                "than 10 ms")
         figures["fig17"] = (_save(fig, out / "fig17_omega_case2.png").name,
                             "Fig. 17: Case 2 yaw-rate input as applied with the +-1.59 rad/s "
-                            "limit (dotted): (a) min-max band of every 10 ms, which shows the "
-                            "limit-to-limit chattering once converged, (b) its 10 ms mean, the "
-                            "yaw rate the robot effectively gets (pulses at 5 s and 50 s).")
-    return figures
+                            "limit (dotted): (a) min-max band of every 10 ms, which shows any "
+                            f"limit-to-limit chattering, (b) its 10 ms mean, {mean} (pulses at "
+                            "5 s and 50 s).")
+    if plant == "kinematic":
+        return figures
+    return {key: (name, caption.replace(":", f" ({plant} chassis):", 1))
+            for key, (name, caption) in figures.items()}

@@ -6,7 +6,8 @@ import math
 import numpy as np
 
 from nfmr_dlsmc.angles import wrap_angles
-from nfmr_dlsmc.metrics import convergence_time, error_criteria, total_variation_rate
+from nfmr_dlsmc.metrics import (convergence_time, error_criteria, simulation_metrics,
+                                total_variation_rate)
 
 #: Heading error below which theta counts as having converged to theta_r (Fig. 9b) [rad]:
 #: the paper gives the times, not the threshold; we use the inner-loop band epsilon.
@@ -17,6 +18,12 @@ SURFACE_TOLERANCE = 1e-3
 #: after each disturbance pulse starts (pulse 0.5 s + 1 s to recover) [s].
 BAND_WINDOW = (15.0, 100.0)
 PULSE_RECOVERY = 1.5
+
+#: The figures of holding the path (:class:`~nfmr_dlsmc.metrics.TrackingMetrics`) each
+#: run keeps: t_conv_1cm [s] and the hold window's.
+HOLD_KEYS = ("t_conv_1cm", "hold_from", "hold_distance_p99", "hold_distance_max",
+             "hold_theta_e_p99", "hold_theta_e_max", "hold_omega_tv", "hold_omega_saturated",
+             "hold_steer_rate_max", "hold_steer_joint_rate_max")
 
 #: Table 2 (Case 1, x0 = (1, 4, 0)) and the convergence times of section 4.2: position
 #: (distance <= 1 mm), theta_r (Fig. 9b) and s_y (Fig. 12).
@@ -79,7 +86,9 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     [m/s], ``max_abs_omega`` [rad/s] applied; ``max_abs_omega_raw``
     [rad/s] and ``omega_raw_over_limit`` (share of steps with |omega_raw| > omega_max)
     before saturation; ``omega_raw_tv`` (total variation per second of omega_raw over
-    the second half of the run) [rad/s^2].
+    the second half of the run) [rad/s^2]; and the :data:`HOLD_KEYS` of
+    :func:`~nfmr_dlsmc.metrics.simulation_metrics` (``t_conv_1cm`` and the figures of
+    holding the path from 15 s on, steer figures where the result has steer angles).
     """
     t, dt = result.t, result.dt
     telemetry = result.telemetry
@@ -119,6 +128,8 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     else:
         metrics.update(theta_e_settled_iae=None, theta_e_settled_ise=None,
                        theta_e_settled_std=None)
+    tracking = simulation_metrics(result).as_dict()
+    metrics.update({key: tracking[key] for key in HOLD_KEYS})
     for key in ("iae", "ise", "std", "theta_r_iae", "theta_r_ise", "theta_r_std",
                 "theta_r_settled_iae", "theta_r_settled_ise", "theta_r_settled_std"):
         metrics[key] = _finite_or_none(metrics[key])

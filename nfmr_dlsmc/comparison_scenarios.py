@@ -1,13 +1,19 @@
 """The paper's comparison scenarios (section 4.2): the sine reference, 100 s at 1 ms,
-Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses."""
+Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses; on the
+kinematic model (3) or the pybullet chassis."""
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from nfmr_dlsmc.controllers import build_controller
 from nfmr_dlsmc.disturbances import YawRateDisturbance, paper_disturbance
 from nfmr_dlsmc.kinematic_sim import SimResult, simulate
+from nfmr_dlsmc.steering import RobotGeometry, SteerMode, steer_angle_series
 from nfmr_dlsmc.trajectories import make_trajectory
+
+#: The plants a scenario runs on: the unicycle model (3), forward Euler; the simulated
+#: 4WIS chassis (Table 1, double Ackermann) in this process.
+PLANTS = ("kinematic", "pybullet")
 
 
 @dataclass(frozen=True)
@@ -47,8 +53,26 @@ CASE2 = Scenario("case2", (1.0, 1.0, math.pi / 6.0), paper_disturbance())
 SCENARIOS = (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)
 
 
-def run_scenario(name: str, block: dict | None, scenario: Scenario) -> SimResult:
-    """Controller ``name`` with gain block ``block`` on ``scenario`` (paper sine, paper limits)."""
+def run_scenario(name: str, block: dict | None, scenario: Scenario,
+                 plant: str = "kinematic") -> SimResult:
+    """Controller ``name`` with gain block ``block`` on ``scenario`` (paper sine, paper
+    limits) on ``plant`` (one of :data:`PLANTS`).
+
+    On the kinematic model the result's ``steer`` holds the steer angles [rad] the double
+    Ackermann mapping would command for (v, omega + disturbance); on pybullet the
+    disturbance is added to omega before the wheel mapping and the chassis is that of the
+    default :class:`~nfmr_sim.world_config.WorldConfig` (Table 1, physics at 1 ms).
+    """
+    if plant not in PLANTS:
+        raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     controller = build_controller(name, block, dt=scenario.dt)
-    return simulate(controller, make_trajectory("sine"), scenario.x0, scenario.duration,
-                    scenario.dt, scenario.disturbance)
+    trajectory = make_trajectory("sine")
+    if plant == "pybullet":
+        # Imported here: the kinematic plant must not need pybullet.
+        from nfmr_dlsmc.pybullet_plant import simulate_pybullet
+        return simulate_pybullet(controller, trajectory, scenario.x0, scenario.duration,
+                                 disturbance=scenario.disturbance)
+    result = simulate(controller, trajectory, scenario.x0, scenario.duration, scenario.dt,
+                      scenario.disturbance)
+    return replace(result, steer=steer_angle_series(result.v, result.omega + result.disturbance,
+                                                    RobotGeometry(), SteerMode()))

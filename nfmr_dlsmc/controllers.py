@@ -1,5 +1,10 @@
 """Every tracking controller of nfmr by name, built from one gain block each
-(``config/comparison.yaml``), with the same (v, omega) interface and input limits."""
+(``config/comparison.yaml``), with the same (v, omega) interface and input limits.
+
+``dlsmc`` and ``dlsmc_robot`` are the same law (:class:`~nfmr_dlsmc.dlsmc.DlsmcController`);
+they differ only in their blocks: the paper's gains, and the robot profile of
+``config/robot_case1.yaml`` (the paper's gains with the four robot options on).
+"""
 
 import sys
 from dataclasses import fields
@@ -22,7 +27,8 @@ from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
 from nfmr_dlsmc.single_loop import CsmcController, DsmcController, PidController
 from nfmr_dlsmc.validation import ParameterError
 
-#: Display names, in the order of the paper's tables, then the other trackers.
+#: Display names, in the order of the paper's tables, then the other trackers, then the
+#: robot profile last (``nfmr-tune-baselines`` seeds each controller by its index here).
 CONTROLLER_LABELS = {
     "dlsmc": "DLSMC (BTINTSMC + ABFSMC)",
     "pid": "PID",
@@ -36,6 +42,7 @@ CONTROLLER_LABELS = {
     "pure_pursuit": "Pure pursuit",
     "stanley": "Stanley",
     "kanayama": "Kanayama",
+    "dlsmc_robot": "DLSMC, robot profile",
 }
 CONTROLLER_NAMES = tuple(CONTROLLER_LABELS)
 
@@ -47,6 +54,10 @@ _SINGLE_LOOP = {
     "stanley": (StanleyController, StanleyGains),
     "kanayama": (KanayamaController, KanayamaGains),
 }
+
+#: The DLSMC's blocks: ``outer`` and ``inner`` sections and these DlsmcConfig options.
+_DLSMC_NAMES = ("dlsmc", "dlsmc_robot")
+_DLSMC_OPTIONS = ("thetadot_source", "thetadot_filter")
 
 # name -> ((outer loop, its gains), (inner loop, its gains))
 _CASCADES = {
@@ -81,7 +92,7 @@ def gain_sections(name: str) -> dict:
     for a single-loop law, ``{"outer": cls, "inner": cls}`` for a cascade."""
     if name in _SINGLE_LOOP:
         return {None: _SINGLE_LOOP[name][1]}
-    if name == "dlsmc":
+    if name in _DLSMC_NAMES:
         return {"outer": OuterLoopGains, "inner": InnerLoopGains}
     if name in _CASCADES:
         (_, outer_gains), (_, inner_gains) = _CASCADES[name]
@@ -99,7 +110,8 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
         One of :data:`CONTROLLER_NAMES`.
     block : dict, optional
         Its gains: ``{gain: value}`` for a single-loop law, ``{"outer": {...},
-        "inner": {...}}`` for a cascade (the DLSMC included).
+        "inner": {...}}`` for a cascade; the DLSMC's (``dlsmc``, ``dlsmc_robot``) may also
+        set ``thetadot_source`` and ``thetadot_filter`` [s] (:class:`DlsmcConfig`).
     limits : InputLimits, optional
         Input saturation shared by every controller (paper values by default).
     dt : float
@@ -119,18 +131,22 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
         if None in sections:
             controller_cls = _SINGLE_LOOP[name][0]
             return controller_cls(_gains(sections[None], block, name), limits, dt)
-        unknown = set(block) - set(sections)
+        options = _DLSMC_OPTIONS if name in _DLSMC_NAMES else ()
+        unknown = set(block) - set(sections) - set(options)
         if unknown:
             key = sorted(unknown)[0]
-            raise ParameterError(f"{name}.{key}", block[key], "unknown section; known: inner, outer")
+            known = ", ".join(sorted({*sections, *options}))
+            raise ParameterError(f"{name}.{key}", block[key], f"unknown section; known: {known}")
         outer = _gains(sections["outer"], block.get("outer"), "outer")
         inner = _gains(sections["inner"], block.get("inner"), "inner")
+        if name in _DLSMC_NAMES:
+            return DlsmcController(DlsmcConfig(
+                outer=outer, inner=inner, limits=limits, dt=dt,
+                **{key: block[key] for key in options if key in block}))
     except ParameterError as exc:
         if exc.parameter.startswith(f"{name}."):
             raise
         raise _prefixed(name, exc) from None
-    if name == "dlsmc":
-        return DlsmcController(DlsmcConfig(outer=outer, inner=inner, limits=limits, dt=dt))
     (outer_cls, _), (inner_cls, _) = _CASCADES[name]
     return CascadeController(outer_cls(outer), inner_cls(inner), limits, dt, name=name)
 
