@@ -28,7 +28,7 @@ import yaml
 
 from nfmr_dlsmc.comparison_scenarios import (CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2,
                                              run_scenario)
-from nfmr_dlsmc.controllers import CONTROLLER_NAMES
+from nfmr_dlsmc.controllers import CONTROLLER_NAMES, load_gain_blocks
 from nfmr_dlsmc.metrics import error_criteria
 from nfmr_dlsmc.validation import ParameterError
 
@@ -125,23 +125,33 @@ def tune(names, budget: int, seed: int, jobs: int, progress=None) -> dict:
 
 
 def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: str) -> None:
-    """``config/comparison.yaml``: the DLSMC's paper gains, each tuned block and its record."""
+    """``config/comparison.yaml``: the DLSMC's paper gains, each tuned block and its record.
+
+    Blocks of controllers that are not tuned (``dlsmc_robot``, the robot profile) are kept
+    as the file at ``path`` had them."""
+    previous = load_gain_blocks(path) if path.is_file() else {}
     controllers = {"dlsmc": {}}
     record = {}
     for name in CONTROLLER_NAMES:
         if name not in best:
+            if name != "dlsmc" and name not in TUNED and name in previous:
+                controllers[name] = previous[name]
             continue
         block, value, default_value = best[name]
         controllers[name] = block
         record[name] = {"objective": objective_name(name), "best": round(value, 4),
                         "defaults": round(default_value, 4) if math.isfinite(default_value)
                         else "diverged"}
+    kept = [name for name in controllers if name != "dlsmc" and name not in record]
     header = (
         "# Gains of every comparison controller (nfmr-compare), one block per controller.\n"
         "# dlsmc: the paper's gains (section 4.1, the defaults), not tuned.\n"
         f"# The others: random search, {budget} gain sets each (defaults first), seed {seed},\n"
         "# ranges in nfmr_dlsmc/baseline_tuning.py; objective per controller under 'tuning'.\n"
-        f"# Reproduce: {command}\n")
+        f"# Reproduce: {command}\n"
+        + (f"# Not tuned, kept from the previous file: {', '.join(kept)} (dlsmc_robot: the robot\n"
+           "# profile, the same values as config/robot_case1.yaml, which explains them).\n"
+           if kept else ""))
     document = {"controllers": controllers,
                 "tuning": {"budget": budget, "seed": seed, "method": "random search",
                            "results": record}}

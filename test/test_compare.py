@@ -259,3 +259,15 @@ def test_compare_rejects_a_bad_gains_file(tmp_path, capsys):
     assert info.value.code == 2
     assert "pid.kp = -2" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
+    path = tmp_path / "comparison.yaml"
+    path.write_text(compare_cli.default_gains_file().read_text())
+    shipped = load_gain_blocks(path)
+    tuned_pid = {"v_c": 0.5, "kp": 1.0, "ki": 0.1, "kd": 0.01, "k_theta": 0.2}
+    baseline_tuning.write_gains_file(path, {"pid": (tuned_pid, 1.0, 2.0)}, 3, 0, "nfmr-tune-baselines")
+    written = load_gain_blocks(path)
+    assert written["dlsmc_robot"] == shipped["dlsmc_robot"]
+    assert written["pid"] == tuned_pid and written["dlsmc"] == {}
+    assert "csmc" not in written  # tuned blocks come only from this search
