@@ -26,7 +26,8 @@ setup(
         "ros-jazzy-rmw-fastrtps-cpp>=8.4,<9",
     ],
     extras_require={
-        "test": ["pytest>=8,<10", "mcap-ros2-support>=0.5,<0.7", "rosbags>=0.10,<0.12"],
+        "test": ["pytest>=8,<10", "mcap-ros2-support>=0.5,<0.7", "rosbags>=0.10,<0.12",
+                 "hypothesis>=6.100,<7"],
     },
     zip_safe=True,
     maintainer="nfmr developers",
@@ -43,6 +44,7 @@ setup(
             "nfmr-run = nfmr_dlsmc.launcher:main",
             "nfmr-analyze = nfmr_dlsmc.analyze_cli:main",
             "nfmr-replay = nfmr_dlsmc.replay_cli:main",
+            "nfmr-reindex = nfmr_dlsmc.reindex_cli:main",
             "nfmr-montecarlo = nfmr_dlsmc.montecarlo_cli:main",
             "nfmr-bench = nfmr_dlsmc.benchmarks:main",
             "nfmr-tune = nfmr_dlsmc.tune_cli:main",

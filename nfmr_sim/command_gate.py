@@ -3,15 +3,143 @@
 ROS-free: the sim node hands every incoming command to a :class:`CommandGate` and asks it,
 once per physics step, what to apply. Faults (a malformed command, or no valid command for
 longer than the timeout) brake the wheels until a valid command arrives again; each fault
-is reported once, when it begins, and its end once, when commands resume.
+is reported once, when it begins, and its end once, when commands resume. A run of
+rejections of one kind (same topic and rule) is one fault, reported with its first message.
+
+A command is valid when it has one value per wheel and every value the wheels would get is
+finite and within the joint limits: steer angles within +-``steer_limit`` [rad] and drive
+speeds within +-``max_wheel_speed`` [rad/s]. For ``cmd_vel`` the check applies to the wheel
+commands the twist maps to, so that a finite but huge twist (whose mapping overflows to
+inf) is refused like a NaN. :func:`check_steer`, :func:`check_wheel_speed` and
+:func:`map_twist` are the pure checks; each returns the accepted values or a
+:class:`Rejection`, never raises.
 """
 
 import math
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
-from nfmr_dlsmc.steering import RobotGeometry, wheel_commands_for_twist
+from nfmr_dlsmc.steering import WHEEL_NAMES, RobotGeometry, wheel_commands_for_twist
+from nfmr_dlsmc.validation import check_positive
+
+STEER_TOPIC = "steer_position_controller/commands"
+WHEEL_TOPIC = "wheel_velocity_controller/commands"
+TWIST_TOPIC = "cmd_vel"
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """Why a command was refused.
+
+    Attributes
+    ----------
+    topic : str
+        Where the command came from.
+    field : str
+        The offending message field (``len(data)``, ``data[2] (rear_left)``,
+        ``linear.x``) or, for a twist that maps out of limits, the twist and the wheel
+        output it maps to.
+    value : object
+        The offending value.
+    unit : str
+    rule : str
+        The rule broken, e.g. ``must be within +-50 rad/s (motors.max_wheel_speed)``.
+    """
+
+    topic: str
+    field: str
+    value: object
+    unit: str
+    rule: str
+
+    @property
+    def kind(self) -> tuple:
+        """(topic, rule): a run of rejections of one kind is reported once."""
+        return self.topic, self.rule
+
+    def __str__(self) -> str:
+        shown = f"{self.value!r} {self.unit}".rstrip()
+        return f"rejected {self.topic}: {self.field} = {shown}: {self.rule}"
+
+
+def _first_out_of_bounds(values: np.ndarray, bound: float) -> int | None:
+    """Index of the first value that is NaN or beyond +-``bound`` (inf included), or None."""
+    bad = np.flatnonzero(~(np.abs(values) <= bound))
+    return int(bad[0]) if bad.size else None
+
+
+def _check_array(values, topic: str, unit: str, bound: float,
+                 bound_name: str) -> np.ndarray | Rejection:
+    array = np.array(values, dtype=float)  # a copy: the caller may reuse its buffer
+    if array.shape != (4,):
+        return Rejection(topic, "len(data)", array.size, "", "must be 4 (FL, FR, RL, RR)")
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        i = int(bad[0])
+        return Rejection(topic, f"data[{i}] ({WHEEL_NAMES[i]})", float(array[i]), unit,
+                         "must be finite, not NaN or inf")
+    i = _first_out_of_bounds(array, bound)
+    if i is not None:
+        return Rejection(topic, f"data[{i}] ({WHEEL_NAMES[i]})", float(array[i]), unit,
+                         f"must be within +-{bound:g} {unit} ({bound_name})")
+    return array
+
+
+def check_steer(values, steer_limit: float) -> np.ndarray | Rejection:
+    """Four steer angles [rad], FL FR RL RR, each finite and within +-``steer_limit`` [rad]."""
+    return _check_array(values, STEER_TOPIC, "rad", steer_limit, "chassis.steer_limit")
+
+
+def check_wheel_speed(values, max_wheel_speed: float) -> np.ndarray | Rejection:
+    """Four drive speeds [rad/s], each finite and within +-``max_wheel_speed`` [rad/s]."""
+    return _check_array(values, WHEEL_TOPIC, "rad/s", max_wheel_speed,
+                        "motors.max_wheel_speed")
+
+
+def map_twist(vx: float, vy: float, wz: float, geometry: RobotGeometry, offset: float,
+              max_wheel_speed: float, hold_steer=None):
+    """The wheel commands of the body twist of P, or why there are none.
+
+    Parameters
+    ----------
+    vx, vy : float
+        Velocity of P in the body frame [m/s] (``linear.x``, ``linear.y``).
+    wz : float
+        Yaw rate [rad/s] (``angular.z``).
+    geometry : RobotGeometry
+        Wheel positions, radius and steer limit.
+    offset : float
+        Body-frame x of P [m].
+    max_wheel_speed : float
+        Largest |drive speed| [rad/s].
+    hold_steer : array-like (4,), optional
+        Steer angles [rad] kept by wheels that do not move.
+
+    Returns
+    -------
+    (steer, wheel_speed) : tuple of ndarray (4,)
+        [rad], [rad/s], within the limits; or a :class:`Rejection`.
+    """
+    fields = (("linear.x", vx, "m/s"), ("linear.y", vy, "m/s"), ("angular.z", wz, "rad/s"))
+    for name, value, unit in fields:
+        if not math.isfinite(value):
+            return Rejection(TWIST_TOPIC, name, value, unit, "must be finite, not NaN or inf")
+    # The centre moves at v_P + omega x (centre - P) = (vx, vy - wz * offset). A finite but
+    # huge twist overflows to inf here; the bound check below refuses it.
+    with np.errstate(over="ignore", invalid="ignore"):
+        cmd = wheel_commands_for_twist(vx, vy - wz * offset, wz, geometry,
+                                       hold_steer=hold_steer)
+    twist = f"(linear.x, linear.y, angular.z) = ({vx:g}, {vy:g}, {wz:g}) maps to"
+    for output, what, unit, bound, bound_name in (
+            (cmd.wheel_speed, "wheel speed", "rad/s", max_wheel_speed, "motors.max_wheel_speed"),
+            (cmd.steer, "steer angle", "rad", geometry.steer_limit, "chassis.steer_limit")):
+        i = _first_out_of_bounds(output, bound)
+        if i is not None:
+            return Rejection(TWIST_TOPIC, f"{twist} {WHEEL_NAMES[i]} {what}", float(output[i]),
+                             unit, f"must be within +-{bound:g} {unit} ({bound_name})")
+    return cmd.steer, cmd.wheel_speed
 
 
 class CommandGate:
@@ -22,75 +150,80 @@ class CommandGate:
     timeout : float
         Simulated time [s] without a valid command after which the robot brakes.
     geometry : RobotGeometry
-        For mapping twists (``cmd_vel``) to wheels.
+        For mapping twists (``cmd_vel``) to wheels; its ``steer_limit`` [rad] bounds steer
+        commands.
     tracked_point_offset : float
         Body-frame x of the point P [m] that ``cmd_vel`` refers to.
+    max_wheel_speed : float
+        Largest |drive speed| [rad/s] a command may ask for.
     """
 
-    def __init__(self, timeout: float, geometry: RobotGeometry, tracked_point_offset: float):
-        self.timeout = timeout
+    def __init__(self, timeout: float, geometry: RobotGeometry, tracked_point_offset: float,
+                 max_wheel_speed: float):
         self.geometry = geometry
         self.offset = tracked_point_offset
         self._cond = threading.Condition()
+        self.configure(timeout, max_wheel_speed)
         self._steer = None
         self._wheels = None
         self._new_steer = self._new_wheels = self._new_twist = self._new_reject = False
         self._last_valid = None  # sim time [s] of the last valid command
         self._fault = "no command received yet"
+        self._fault_kind = None  # Rejection.kind while the fault is a rejection
         self._reported = None
+
+    def configure(self, timeout: float, max_wheel_speed: float) -> None:
+        """Set the command timeout [s] and the wheel speed bound [rad/s] (live changes)."""
+        check_positive("command_timeout", timeout, "s")
+        check_positive("motors.max_wheel_speed", max_wheel_speed, "rad/s")
+        with self._cond:
+            self.timeout = timeout
+            self.max_wheel_speed = max_wheel_speed
 
     # -- inputs (called from subscription callbacks) ----------------------------------------
 
-    @staticmethod
-    def _check(values, what: str) -> str | None:
-        if len(values) != 4:
-            return f"{what} command has {len(values)} values, expected 4 (FL, FR, RL, RR)"
-        if not all(math.isfinite(v) for v in values):
-            return f"{what} command contains NaN or inf: {list(values)}"
-        return None
-
     def offer_steer(self, values, now: float) -> None:
         """A steer-position command [rad] x4 arrived at sim time ``now`` [s]."""
-        self._offer(values, "steer position", now, steer=True)
+        with self._cond:
+            checked = check_steer(values, self.geometry.steer_limit)
+            if isinstance(checked, Rejection):
+                self._reject(checked)
+                return
+            self._steer, self._new_steer = checked, True
+            if self._wheels is not None:
+                self._accept(now)
 
     def offer_wheels(self, values, now: float) -> None:
         """A wheel-velocity command [rad/s] x4 arrived."""
-        self._offer(values, "wheel velocity", now, steer=False)
+        with self._cond:
+            checked = check_wheel_speed(values, self.max_wheel_speed)
+            if isinstance(checked, Rejection):
+                self._reject(checked)
+                return
+            self._wheels, self._new_wheels = checked, True
+            if self._steer is not None:
+                self._accept(now)
 
     def offer_twist(self, vx: float, vy: float, wz: float, now: float) -> None:
         """A body twist of P (m/s, m/s, rad/s) arrived; mapped through the steering geometry."""
         with self._cond:
-            if not all(math.isfinite(v) for v in (vx, vy, wz)):
-                self._set_fault(f"cmd_vel contains NaN or inf: ({vx}, {vy}, {wz})")
+            mapped = map_twist(vx, vy, wz, self.geometry, self.offset, self.max_wheel_speed,
+                               hold_steer=self._steer)
+            if isinstance(mapped, Rejection):
+                self._reject(mapped)
                 return
-            # The centre moves at v_P + omega x (centre - P) = (vx, vy - wz * offset).
-            cmd = wheel_commands_for_twist(vx, vy - wz * self.offset, wz, self.geometry,
-                                           hold_steer=self._steer)
-            self._steer, self._wheels = cmd.steer, cmd.wheel_speed
+            self._steer, self._wheels = mapped
             self._new_twist = True
             self._accept(now)
 
-    def _offer(self, values, what, now, steer):
-        values = list(values)
-        with self._cond:
-            error = self._check(values, what)
-            if error:
-                self._set_fault(f"rejected {error}")
-                return
-            if steer:
-                self._steer, self._new_steer = np.array(values, dtype=float), True
-            else:
-                self._wheels, self._new_wheels = np.array(values, dtype=float), True
-            if self._steer is not None and self._wheels is not None:
-                self._accept(now)
-
     def _accept(self, now):
         self._last_valid = now
-        self._fault = None
+        self._fault = self._fault_kind = None
         self._cond.notify_all()
 
-    def _set_fault(self, reason):
-        self._fault = reason
+    def _reject(self, rejection: Rejection):
+        if rejection.kind != self._fault_kind:  # a run of one kind keeps its first message
+            self._fault, self._fault_kind = str(rejection), rejection.kind
         self._steer = self._wheels = None
         self._new_steer = self._new_wheels = self._new_twist = False
         self._new_reject = True

@@ -5,15 +5,26 @@ physics step; ``joint_states``, ``ground_truth`` (true odometry of P) and
 ``disturbance_active`` every ``aux_publish_every`` steps. Subscribes to
 ``steer_position_controller/commands`` [rad] and ``wheel_velocity_controller/commands``
 [rad/s] (std_msgs/Float64MultiArray, FL FR RL RR) and, alternatively, ``cmd_vel``
-(geometry_msgs/Twist of P, mapped through the steering geometry). Malformed or missing
-commands brake the wheels; the reason is logged once.
+(geometry_msgs/Twist of P, mapped through the steering geometry). Malformed, non-finite or
+out-of-limit commands (see :mod:`nfmr_sim.command_gate`), or missing ones, brake the
+wheels; the reason is logged once.
+
+Parameters in ``LIVE_PARAMETERS`` may be changed while the sim runs: a change is validated
+as a whole through :func:`sim_settings` and applied at the next physics step. The others
+are read-only (the world is built from them); setting one is refused with "read-only:
+restart the sim". A failure of the stepping thread is fatal: it is logged, the node shuts
+down and ``sim`` exits with code 1 naming the error.
 """
 
 import sys
+import threading
 import time
+import traceback
+from pathlib import Path
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -23,12 +34,34 @@ from std_msgs.msg import Bool, Float64MultiArray
 from nfmr_dlsmc.ros_parameters import declare_parameters
 from nfmr_dlsmc.steering import RobotGeometry
 from nfmr_dlsmc.node_main import LoopThread, run_node
-from nfmr_sim.command_gate import CommandGate
-from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
+from nfmr_dlsmc.validation import ParameterError
+from nfmr_sim.command_gate import STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC, CommandGate
+from nfmr_sim.sim_params import (sim_parameter_defaults, sim_parameter_descriptions,
+                                 sim_settings)
 from nfmr_sim.ros_messages import odometry_message, time_message
 from nfmr_sim.world import DRIVE_JOINTS, STEER_JOINTS, ChassisWorld
 
-READ_ONLY = ("mode", "physics_dt", "gui")
+# What the step thread re-reads or hands on at every step (the world reads its disturbance
+# config every step; odom_latency_steps and seed only at reset, so those are read-only).
+LIVE_PARAMETERS = ("lockstep_timeout", "command_timeout", "aux_publish_every", "max_time",
+                   "motors.max_wheel_speed", "disturbance.constant_force_x",
+                   "disturbance.constant_force_y", "disturbance.odom_position_noise",
+                   "disturbance.odom_yaw_noise", "disturbance.pulses")
+
+
+def _plain(value):
+    """A parameter value as plain Python (arrays as lists)."""
+    return value.tolist() if hasattr(value, "tolist") else value
+
+
+def describe_failure(exc: BaseException) -> str:
+    """``Type: message (at package/file.py:line in function)`` of an exception."""
+    where = ""
+    frames = traceback.extract_tb(exc.__traceback__)
+    if frames:
+        last = frames[-1]
+        where = f" (at {'/'.join(Path(last.filename).parts[-2:])}:{last.lineno} in {last.name})"
+    return f"{type(exc).__name__}: {exc}{where}"
 
 
 class SimNode(Node):
@@ -36,7 +69,11 @@ class SimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__("sim", **kwargs)
-        self.settings = sim_settings(declare_parameters(self, sim_parameter_defaults(), READ_ONLY))
+        defaults = sim_parameter_defaults()
+        read_only = [name for name in defaults if name not in LIVE_PARAMETERS]
+        self._values = declare_parameters(self, defaults, read_only,
+                                          sim_parameter_descriptions())
+        self.settings = sim_settings(self._values)
         world_cfg = self.settings.world
         self.world = ChassisWorld(world_cfg, gui=self.settings.gui)
         self.world.reset(self.settings.initial_pose)
@@ -44,25 +81,70 @@ class SimNode(Node):
         geometry = RobotGeometry(chassis.wheelbase, chassis.track, chassis.wheel_radius,
                                  chassis.steer_limit)
         self.gate = CommandGate(self.settings.command_timeout, geometry,
-                                world_cfg.tracked_point_offset)
+                                world_cfg.tracked_point_offset, self.settings.max_wheel_speed)
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, "/clock", reliable)
         self._odom_pub = self.create_publisher(Odometry, "odom", reliable)
         self._truth_pub = self.create_publisher(Odometry, "ground_truth", reliable)
         self._joint_pub = self.create_publisher(JointState, "joint_states", reliable)
         self._dist_pub = self.create_publisher(Bool, "disturbance_active", reliable)
-        self.create_subscription(Float64MultiArray, "steer_position_controller/commands",
+        self.create_subscription(Float64MultiArray, STEER_TOPIC,
                                  lambda m: self.gate.offer_steer(m.data, self.world.time),
                                  reliable)
-        self.create_subscription(Float64MultiArray, "wheel_velocity_controller/commands",
+        self.create_subscription(Float64MultiArray, WHEEL_TOPIC,
                                  lambda m: self.gate.offer_wheels(m.data, self.world.time),
                                  reliable)
-        self.create_subscription(Twist, "cmd_vel", self._on_twist, reliable)
-        self._stepper = LoopThread(self._loop, "sim-step")
+        self.create_subscription(Twist, TWIST_TOPIC, self._on_twist, reliable)
+        self._pending = None  # settings of an accepted live change, for the next step
+        self._pending_lock = threading.Lock()
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._stepper = LoopThread(self._step_thread, "sim-step")
         self.steps = 0
+        self.failure = None  # describe_failure() of the exception that ended stepping
 
     def _on_twist(self, msg: Twist) -> None:
         self.gate.offer_twist(msg.linear.x, msg.linear.y, msg.angular.z, self.world.time)
+
+    # -- parameters -------------------------------------------------------------------------
+
+    def set_parameters_atomically(self, parameter_list):
+        """Refuse read-only sim parameters with the remedy, then set as rclpy does.
+
+        rclpy refuses them too, before any on-set callback, but names no remedy.
+        """
+        for param in parameter_list:
+            if param.name in self._values and param.name not in LIVE_PARAMETERS:
+                return SetParametersResult(
+                    successful=False, reason=f"{param.name} = {_plain(param.value)!r}: "
+                                             f"read-only: restart the sim to change it")
+        return super().set_parameters_atomically(parameter_list)
+
+    def set_parameters(self, parameter_list):
+        """Set each parameter on its own (as rclpy does), refusing read-only ones likewise."""
+        return [self.set_parameters_atomically([param]) for param in parameter_list]
+
+    def _on_set_parameters(self, changes) -> SetParametersResult:
+        """Validate a live change through :func:`sim_settings`; apply it at the next step."""
+        candidate = dict(self._values)
+        candidate.update({p.name: _plain(p.value) for p in changes if p.name in candidate})
+        try:
+            settings = sim_settings(candidate)
+        except ParameterError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        with self._pending_lock:
+            self._values = candidate
+            self._pending = settings
+        return SetParametersResult(successful=True)
+
+    def _apply_pending(self) -> None:
+        """Step thread: take over the settings of an accepted live change, if any."""
+        with self._pending_lock:
+            pending, self._pending = self._pending, None
+        if pending is None:
+            return
+        self.gate.configure(pending.command_timeout, pending.max_wheel_speed)
+        self.world.config = pending.world  # differs in live disturbance.* values only
+        self.settings = pending
 
     # -- stepping ---------------------------------------------------------------------------
 
@@ -73,6 +155,16 @@ class SimNode(Node):
     def stop(self) -> None:
         """Stop stepping and wait for the thread (idempotent)."""
         self._stepper.stop()
+
+    def _step_thread(self) -> None:
+        """Step; a failure is fatal: recorded in ``failure``, logged, and the node's context
+        shut down, which ends its executor (``main`` then exits with code 1)."""
+        try:
+            self._loop()
+        except Exception as exc:  # any failure: a sim that no longer steps must not live on
+            self.failure = describe_failure(exc)
+            self.get_logger().fatal(f"step thread failed: {self.failure}; shutting down")
+            self.context.try_shutdown()
 
     def _loop(self) -> None:
         s = self.settings
@@ -87,6 +179,8 @@ class SimNode(Node):
         self._publish(out, aux=True)
         start = time.monotonic()
         while self._stepper.running.is_set():
+            self._apply_pending()
+            s = self.settings
             if s.max_time and self.world.time >= s.max_time - 0.5 * dt:
                 self.get_logger().info(f"reached max_time {s.max_time:g} s: stepping stopped")
                 return  # the node stays up, so everything published so far is delivered
@@ -136,8 +230,21 @@ class SimNode(Node):
 
 
 def main(args=None) -> int:
-    """``ros2 run nfmr_dlsmc sim --ros-args --params-file FILE``."""
-    return run_node("sim", SimNode, args)
+    """``ros2 run nfmr_dlsmc sim --ros-args --params-file FILE``.
+
+    Returns 0 after a normal shutdown, 2 for bad parameters, 1 if stepping failed.
+    """
+    nodes = []
+
+    def create():
+        nodes.append(SimNode())
+        return nodes[-1]
+
+    code = run_node("sim", create, args)
+    if nodes and nodes[-1].failure:
+        print(f"sim: step thread failed: {nodes[-1].failure}", file=sys.stderr)
+        return 1
+    return code
 
 
 if __name__ == "__main__":

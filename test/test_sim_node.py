@@ -4,6 +4,7 @@ import math
 import threading
 import time
 
+import numpy as np
 import pytest
 import rclpy
 from geometry_msgs.msg import Twist
@@ -12,13 +13,15 @@ from rcl_interfaces.msg import Log
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
 from nfmr_dlsmc.validation import ParameterError
-from nfmr_sim.sim_node import SimNode
+from nfmr_sim.sim_node import LIVE_PARAMETERS, SimNode
+from nfmr_sim.sim_params import sim_parameter_defaults
 
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # /rosout keeps its latest messages for late joiners (transient local): so do we.
@@ -146,9 +149,12 @@ def test_cmd_vel_goes_through_the_steering_geometry(ros_context):
 
 
 @pytest.mark.parametrize("steer, wheels, reason", [
-    ([0.0] * 4, [7.0] * 3, "has 3 values"),
-    ([0.0] * 4, [math.nan] * 4, "NaN or inf"),
-    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, "NaN or inf"),
+    ([0.0] * 4, [7.0] * 3, "wheel_velocity_controller/commands: len(data) = 3: must be 4"),
+    ([0.0] * 4, [math.nan] * 4, "data[0] (front_left) = nan rad/s: must be finite, not NaN or inf"),
+    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, "steer_position_controller/commands: data[0] "
+                                          "(front_left) = inf rad: must be finite"),
+    ([0.0] * 4, [1e308] * 4, "data[0] (front_left) = 1e+308 rad/s: must be within +-50 rad/s "
+                             "(motors.max_wheel_speed)"),
 ])
 def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reason):
     sim, driver, executor = start(ros_context, lockstep_timeout=0.005)
@@ -164,6 +170,114 @@ def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reas
         driver.drive(500, [0.0] * 4, [7.0] * 4)  # valid again: drives on
         assert driver.odom[-1].twist.twist.linear.x > 0.3
         wait_for(lambda: any("resumed" in m for m in driver.logs))
+    finally:
+        stop(sim, driver, executor)
+
+
+def _twist(vx, wz):
+    msg = Twist()
+    msg.linear.x, msg.angular.z = vx, wz
+    return msg
+
+
+def test_a_huge_cmd_vel_brakes_is_logged_once_and_the_sim_keeps_stepping(ros_context):
+    sim, driver, executor = start(ros_context, lockstep_timeout=0.005)
+    try:
+        driver.wait_odom(1)
+        for _ in range(500):
+            n = len(driver.odom)
+            driver.twist.publish(_twist(0.5, 0.0))
+            driver.wait_odom(n + 1)
+        assert driver.odom[-1].twist.twist.linear.x > 0.4
+        for k in range(500):  # huge, and different every time
+            n = len(driver.odom)
+            driver.twist.publish(_twist(1e308 / (k + 1), 1e308))
+            driver.wait_odom(n + 1)
+        assert abs(driver.odom[-1].twist.twist.linear.x) < 0.01
+        steps = sim.steps
+        driver.wait_odom(len(driver.odom) + 100)  # stepping on by lockstep timeouts
+        assert sim.steps >= steps + 100 and sim.failure is None
+        wait_for(lambda: any("cmd_vel" in m for m in driver.logs))
+        braking = [m for m in driver.logs if m.startswith("braking: rejected cmd_vel")]
+        assert braking == [
+            "braking: rejected cmd_vel: (linear.x, linear.y, angular.z) = (1e+308, 0, 1e+308) "
+            "maps to front_left wheel speed = inf rad/s: must be within +-50 rad/s "
+            "(motors.max_wheel_speed)"]
+    finally:
+        stop(sim, driver, executor)
+
+
+def _set(client, name, value):
+    """Set one sim parameter over the parameter service; its SetParametersResult."""
+    future = client.set_parameters([Parameter(name, value=value)])
+    wait_for(future.done)
+    return future.result().results[0]
+
+
+@pytest.mark.parametrize("name, value, reason", [
+    ("command_timeout", -1.0, "command_timeout = -1.0 s: must be > 0"),
+    ("disturbance.odom_position_noise", math.nan,
+     "disturbance.odom_position_noise = nan m: must be a finite number"),
+    ("disturbance.pulses", [1.0, 2.0], "disturbance.pulses = [1.0, 2.0]: must hold groups of 5"),
+    ("motors.max_wheel_speed", 0.0, "motors.max_wheel_speed = 0.0 rad/s: must be > 0"),
+    ("friction.lateral", math.nan, "friction.lateral = nan: read-only: restart the sim"),
+    ("physics_dt", 0.002, "physics_dt = 0.002: read-only: restart the sim"),
+    ("chassis.steer_limit", 1.0, "chassis.steer_limit = 1.0: read-only: restart the sim"),
+])
+def test_live_parameter_changes_are_validated_and_read_only_ones_refused(
+        ros_context, name, value, reason):
+    sim, driver, executor = start(ros_context, mode="realtime")
+    try:
+        client = AsyncParameterClient(driver, "sim")
+        assert client.wait_for_services(timeout_sec=10.0)
+        before = sim.settings
+        result = _set(client, name, value)
+        assert not result.successful and result.reason.startswith(reason)
+        time.sleep(0.05)  # a few steps: nothing changed
+        assert sim.settings is before
+        assert sim.failure is None
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_valid_live_changes_apply_at_the_next_step(ros_context):
+    sim, driver, executor = start(ros_context, lockstep_timeout=0.002)
+    try:
+        client = AsyncParameterClient(driver, "sim")
+        assert client.wait_for_services(timeout_sec=10.0)
+        driver.wait_odom(50)
+        still = [m.pose.pose.position.x for m in driver.odom[-50:]]
+        assert max(still) - min(still) < 1e-4
+        for name, value in (("disturbance.odom_position_noise", 0.01),
+                            ("command_timeout", 0.25), ("motors.max_wheel_speed", 5.0)):
+            assert _set(client, name, value).successful
+        wait_for(lambda: sim.settings.max_wheel_speed == 5.0)
+        assert sim.gate.timeout == 0.25 and sim.gate.max_wheel_speed == 5.0
+        assert sim.world.config.disturbance.odom_position_noise == 0.01
+        n = len(driver.odom)
+        driver.wait_odom(n + 200)
+        noisy = [m.pose.pose.position.x for m in driver.odom[n:]]
+        assert 0.005 < float(np.std(noisy)) < 0.02
+        driver.drive(5, [0.0] * 4, [7.0] * 4)  # beyond the new bound: rejected
+        wait_for(lambda: any("must be within +-5 rad/s (motors.max_wheel_speed)" in m
+                             for m in driver.logs))
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_every_sim_parameter_is_described_over_dds(ros_context):
+    sim, driver, executor = start(ros_context, mode="realtime")
+    try:
+        client = AsyncParameterClient(driver, "sim")
+        assert client.wait_for_services(timeout_sec=10.0)
+        names = list(sim_parameter_defaults())
+        future = client.describe_parameters(names)
+        wait_for(future.done)
+        descriptors = {d.name: d for d in future.result().descriptors}
+        assert set(descriptors) == set(names)
+        for name, descriptor in descriptors.items():
+            assert len(descriptor.description) > 10, name
+            assert descriptor.read_only == (name not in LIVE_PARAMETERS), name
     finally:
         stop(sim, driver, executor)
 

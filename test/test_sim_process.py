@@ -45,7 +45,8 @@ def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
 
 @pytest.mark.parametrize("arg, needle", [
     ("mode:=fast", "mode = 'fast'"),
-    ("physics_dt:=1", "physics_dt = 1: must be of type double"),
+    ("physics_dt:=fast", "physics_dt = 'fast': must be of type double"),
+    ("physics_dt:=1", "physics_dt = 1.0 s: must be <= 0.01"),  # rclpy makes the int a double
     ("motors.rated:=1.0", "motors.rated = 1.0: unknown parameter"),
 ])
 def test_invalid_parameter_stops_the_process_with_its_name(arg, needle):
@@ -53,4 +54,31 @@ def test_invalid_parameter_stops_the_process_with_its_name(arg, needle):
                           timeout=60)
     assert proc.returncode == 2
     assert needle in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+# The sim's own main, in a child process whose world fails at its 100th physics step.
+FAILING_STEP = """
+import sys
+from nfmr_sim import world
+from nfmr_sim.sim_node import main
+
+step = world.ChassisWorld.step
+
+def failing_step(self):
+    if self._steps == 99:
+        raise RuntimeError("injected failure at step 100")
+    return step(self)
+
+world.ChassisWorld.step = failing_step
+sys.exit(main())
+"""
+
+
+def test_a_failing_step_thread_ends_the_process_naming_the_error():
+    proc = subprocess.run([sys.executable, "-c", FAILING_STEP, "--ros-args", "-p",
+                           "mode:=realtime"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 1, proc.stderr
+    assert ("sim: step thread failed: RuntimeError: injected failure at step 100 "
+            "(at <string>:" in proc.stderr)
     assert "Traceback" not in proc.stderr
