@@ -5,14 +5,20 @@ killed (no summary, a cut last chunk) is still read up to its last complete chun
 result says how much was lost. Problems raise :class:`BagError` with a one-line message.
 """
 
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from mcap.exceptions import McapError
 from mcap.records import Channel, Footer, Message, Schema
 from mcap.stream_reader import StreamReader
+from zstandard import ZstdError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
+#: What reading a cut or corrupted record raises: its length runs past the end (EOFError,
+#: struct.error), its fields or compressed chunk do not decode (McapError, ValueError,
+#: KeyError, zstandard's ZstdError).
+_CUT_OR_CORRUPT = (McapError, EOFError, ValueError, KeyError, struct.error, ZstdError)
 
 
 class BagError(Exception):
@@ -127,7 +133,7 @@ def iter_bag(path, topics=None, contents: BagContents | None = None):
                 position = stream.tell()
             else:
                 contents.truncated = True
-        except (McapError, EOFError, ValueError, KeyError):
+        except _CUT_OR_CORRUPT:
             contents.truncated = True
         if contents.truncated:
             contents.unread_bytes = max(0, size - position)

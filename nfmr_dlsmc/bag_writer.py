@@ -105,10 +105,13 @@ class BagWriter:
         The bag directory to create (must not exist).
     chunk_size : int
         MCAP chunk size [bytes]; a killed recorder loses at most the open chunk.
+    stem : str, optional
+        The file is ``<stem>_0.mcap`` (default: the directory's name, as rosbag2 does).
     """
 
     directory: Path
     chunk_size: int = 1 << 20
+    stem: str | None = None
     _topics: dict = field(default_factory=dict, init=False)
     _schemas: dict = field(default_factory=dict, init=False)
     _first: int | None = field(default=None, init=False)
@@ -118,7 +121,7 @@ class BagWriter:
     def __post_init__(self):
         self.directory = Path(self.directory)
         self.directory.mkdir(parents=True, exist_ok=False)
-        self.path = self.directory / f"{self.directory.name}_0.mcap"
+        self.path = self.directory / f"{self.stem or self.directory.name}_0.mcap"
         self._stream = self.path.open("wb")
         self._writer = Writer(self._stream, chunk_size=self.chunk_size,
                               compression=CompressionType.ZSTD)
@@ -130,8 +133,9 @@ class BagWriter:
     def __exit__(self, *exc):
         self.finish()
 
-    def add_topic(self, name: str, type_name: str, qos: list[QosProfile]) -> None:
-        """Declare a topic before writing its messages (``type_name`` like ``pkg/msg/T``)."""
+    def add_topic(self, name: str, type_name: str, qos: list) -> None:
+        """Declare a topic before writing its messages (``type_name`` like ``pkg/msg/T``);
+        ``qos``: :class:`QosProfile` objects, or mappings as rosbag2 stores them."""
         if name in self._topics:
             return
         if type_name not in self._schemas:
@@ -139,7 +143,7 @@ class BagWriter:
                 name=type_name, encoding="ros2msg",
                 data=message_definition(type_name).encode())
         digest = type_hash(type_name)
-        profiles = [q.as_dict() for q in qos]
+        profiles = [q.as_dict() if isinstance(q, QosProfile) else dict(q) for q in qos]
         channel = self._writer.register_channel(
             topic=name, message_encoding="cdr", schema_id=self._schemas[type_name],
             metadata={"offered_qos_profiles": yaml.safe_dump(profiles, sort_keys=False).strip(),
