@@ -194,7 +194,12 @@ def run(args) -> int:
         children = [start_child("sim", "nfmr_sim.sim_node", sim_args, run_dir),
                     start_child("controller", "nfmr_dlsmc.controller_node", ctrl_args, run_dir)]
         wait_for_run(children, clock, args.duration, args.stall_timeout)
-        clock.spin(1.0)  # the sim has stopped stepping: let its last messages arrive
+        # The sim has stopped stepping at --duration: let the last command arrive, then stop
+        # the controller well within its odometry timeout, so that a run that ended as
+        # planned ends without a safety stop.
+        clock.spin(0.3)
+        stop_children(children[1:])
+        clock.spin(0.7)  # the sim's last messages
     except KeyboardInterrupt:
         interrupted = True
         status = 130

@@ -203,7 +203,8 @@ def test_twist_stamped_on_request(setup):
     ("inner.p1", 32, "inner.p1 = 32: must be a positive odd integer"),
     ("outer.p2", 17, "outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2"),
     ("limits.omega_max", -1.0, "limits.omega_max = -1.0 rad/s: must be > 0"),
-    ("inner.eps", 1, "inner.eps = 1: must be of type double"),
+    ("inner.eps", "small", "inner.eps = 'small': must be of type double"),
+    ("inner.eps", 4, "inner.eps = 4.0 rad: must be < pi"),  # an integer is a number
     ("outer.gain", 1.0, "outer.gain = 1.0: unknown parameter"),
     ("tick_source", "timer", "tick_source = 'timer': must be one of odom, clock"),
     ("trajectory.name", "spiral", "trajectory.name = 'spiral'"),

@@ -174,3 +174,21 @@ def test_a_controller_and_sim_for_different_robots_are_refused_before_starting(
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 2 and needle in stderr, stderr
     assert not (tmp_path / "runs").exists() and not list(tmp_path.glob("*_mismatch"))
+
+
+def test_a_run_that_reaches_its_duration_ends_cleanly(short_run):
+    # No safety stop at the end, and the loop reported healthy throughout (in lockstep the
+    # tick periods count on the odometry stamps, not the wall clock).
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+
+    from nfmr_dlsmc.bag_reader import read_bag
+
+    code, stdout, _ = short_run
+    assert code == 0 and "(0 stopped by safety)" in stdout
+    bag = Path(stdout.strip().splitlines()[-1])
+    assert "stopping the robot" not in (bag.parent / "controller.log").read_text()
+    diagnostics = [deserialize_message(m.data, DiagnosticArray)
+                   for m in read_bag(bag, topics=["/diagnostics"]).messages]
+    assert len(diagnostics) >= 2
+    levels = [s.level for d in diagnostics for s in d.status]
+    assert levels and all(level == DiagnosticStatus.OK for level in levels), levels
