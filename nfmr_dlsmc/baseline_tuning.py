@@ -20,7 +20,6 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +27,11 @@ import yaml
 
 from nfmr_dlsmc.comparison_scenarios import (CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2,
                                              run_scenario)
+from nfmr_dlsmc.cli_common import OneLineParser, check_not_shipped, check_writable, run_command
 from nfmr_dlsmc.controllers import CONTROLLER_NAMES, load_gain_blocks
 from nfmr_dlsmc.metrics import error_criteria
 from nfmr_dlsmc.validation import ParameterError
+from nfmr_dlsmc.worker_pool import worker_pool
 
 #: Log-uniform search ranges: controller -> {(section or None, gain): (low, high)}.
 SEARCH_SPACES = {
@@ -111,7 +112,7 @@ def tune(names, budget: int, seed: int, jobs: int, progress=None) -> dict:
              for i, block in enumerate(candidates(name, budget, seed))]
     blocks = {(name, i): block for name, i, block in tasks}
     scores = {}
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    with worker_pool(jobs) as pool:
         for done, (name, i, value) in enumerate(pool.map(_score_task, tasks, chunksize=2), 1):
             scores[(name, i)] = value
             if progress:
@@ -159,22 +160,32 @@ def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: st
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="nfmr-tune-baselines",
+    parser = OneLineParser(prog="nfmr-tune-baselines",
                                      description=__doc__.split("\n")[0].split(": ", 1)[1])
     parser.add_argument("--budget", type=int, default=60, help="gain sets per controller")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--controllers", nargs="+", choices=TUNED, default=list(TUNED))
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--out", type=Path, default=Path("config/comparison.yaml"))
+    parser.add_argument("--out", type=Path, default=Path("comparison.yaml"),
+                        help="gains file to write (default comparison.yaml here; the shipped "
+                             "config/comparison.yaml only with --force)")
+    parser.add_argument("--force", action="store_true",
+                        help="allow --out to replace a gains file shipped with nfmr")
     return parser
 
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-tune-baselines``."""
+    return run_command("nfmr-tune-baselines", _run, argv)
+
+
+def _run(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.budget < 1 or args.jobs < 1:
         parser.error("--budget and --jobs must be >= 1")
+    check_writable(parser, args.out, "--out")
+    check_not_shipped(parser, args.out, "--out", args.force)
     begin = time.perf_counter()
 
     def progress(done, total):

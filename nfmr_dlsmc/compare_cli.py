@@ -9,18 +9,20 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from nfmr_dlsmc.cli_common import OneLineParser, check_writable, json_ready, run_command
 from nfmr_dlsmc.comparison_metrics import run_metrics
 from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS, SCENARIOS, run_scenario
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
 from nfmr_dlsmc.gains import InputLimits
 from nfmr_dlsmc.validation import ParameterError
+from nfmr_dlsmc.worker_pool import worker_pool
 
 #: Samples per plotted point (10 ms at the 1 ms period); omega is kept as the min / max
 #: of each block so chattering stays visible.
@@ -94,7 +96,7 @@ def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
     """Run ``tasks`` on ``jobs`` processes (their stdout silenced, see :func:`quiet_stdout`);
     metrics and series keyed by task key."""
     metrics, series = {}, {}
-    with ProcessPoolExecutor(max_workers=jobs, initializer=quiet_stdout) as pool:
+    with worker_pool(jobs, quiet_stdout) as pool:
         futures = [pool.submit(run_task, task) for task in tasks]
         for done, future in enumerate(as_completed(futures), 1):
             key, run_metrics_, run_series = future.result()
@@ -113,13 +115,6 @@ def results_document(metrics: dict, plant: str) -> dict:
     return document
 
 
-class _OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a bad argument in one line and exits 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
 def _duration(text: str) -> float:
     try:
         value = float(text)
@@ -131,7 +126,7 @@ def _duration(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
+    parser = OneLineParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=Path("report"),
                         help="report folder (default report/)")
     parser.add_argument("--plant", choices=PLANTS, default="kinematic",
@@ -152,6 +147,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-compare``."""
+    return run_command("nfmr-compare", _run, argv)
+
+
+def _run(argv) -> int:
     from nfmr_dlsmc.comparison_figures import write_figures
     from nfmr_dlsmc.comparison_report import write_report
 
@@ -159,6 +158,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.jobs < 1:
         parser.error("--jobs must be >= 1")
+    check_writable(parser, args.out, "--out", directory=True)
     gains_path = args.gains or default_gains_file()
     names = list(dict.fromkeys(["dlsmc", *args.controllers]))
     try:
@@ -180,7 +180,7 @@ def main(argv=None) -> int:
     print(file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
     document = results_document(metrics, args.plant)
-    (args.out / "results.json").write_text(json.dumps(document, indent=1))
+    (args.out / "results.json").write_text(json.dumps(json_ready(document), indent=1))
     figures = write_figures(args.out, series, names, args.plant)
     write_report(args.out / "report.md", document, figures, gains_path,
                  time.perf_counter() - begin, len(tasks), args.jobs, duration=args.duration)

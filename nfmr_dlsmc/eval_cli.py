@@ -9,6 +9,7 @@ import sys
 import time
 from dataclasses import replace
 
+from nfmr_dlsmc.cli_common import OneLineParser, json_ready, run_command
 from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
@@ -24,13 +25,6 @@ from nfmr_dlsmc.validation import ParameterError
 PAPER_CASE1 = {"iae": 13.5757, "ise": 37.1057, "std": 0.5938, "t_conv": 7.1}
 #: The plants ``--plant`` offers.
 PLANTS = ("kinematic", "pybullet")
-
-
-class _OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a bad argument in one line and exits 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _pose(text: str) -> tuple[float, float, float]:
@@ -69,7 +63,7 @@ def _non_negative(text: str) -> float:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``nfmr-eval`` command line."""
-    parser = _OneLineParser(
+    parser = OneLineParser(
         prog="nfmr-eval",
         description="Simulate one tracking scenario with the kinematic model (3) or the "
                     "pybullet chassis and print the paper's metrics and those of holding the "
@@ -186,26 +180,9 @@ def _check_length(parser, duration: float, dt: float) -> None:
                      f"{available / 2**30:.3g} GiB are available")
 
 
-def _json_ready(value):
-    """Finite floats at 12 significant digits, non-finite ones as null (JSON has no NaN)."""
-    if isinstance(value, float):
-        return float(f"{value:.12g}") if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _json_ready(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_json_ready(v) for v in value]
-    return value
-
-
 def main(argv=None) -> int:
-    """Entry point of ``nfmr-eval``; returns the exit code. A closed stdout (``| head``)
-    ends it quietly."""
-    try:
-        return _run(argv)
-    except BrokenPipeError:
-        # Python flushes stdout again at exit: point it at /dev/null first.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+    """Entry point of ``nfmr-eval``; returns the exit code."""
+    return run_command("nfmr-eval", _run, argv)
 
 
 def _run(argv) -> int:
@@ -244,7 +221,7 @@ def _run(argv) -> int:
         "x0": list(args.x0), "duration": args.duration, "dt": params.dlsmc.dt,
         "disturbance": args.disturbance, "steps": len(sim.t), "cpu_s": round(cpu_s, 4)}
     if args.json:
-        print(json.dumps(_json_ready(result)))
+        print(json.dumps(json_ready(result)))
     else:
         paper = PAPER_CASE1 if _is_paper_case1(args, params, trajectory) else None
         print(format_table(result, paper))

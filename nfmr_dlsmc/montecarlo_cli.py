@@ -18,12 +18,13 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from pathlib import Path
 
 import numpy as np
 
 from nfmr_dlsmc.batch_sim import simulate_batch_parallel
+from nfmr_dlsmc.cli_common import OneLineParser, check_writable, json_ready, run_command
 from nfmr_dlsmc.compare_cli import quiet_stdout
 from nfmr_dlsmc.comparison_scenarios import PLANTS
 from nfmr_dlsmc.disturbances import disturbance_by_name
@@ -32,18 +33,12 @@ from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.metrics import COARSE_TOLERANCE, simulation_metrics
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
 from nfmr_dlsmc.validation import ParameterError
+from nfmr_dlsmc.worker_pool import worker_pool
 
 #: Per-start figures: convergence times (1 mm, 1 cm) [s], IAE of the distance [m*s], final
 #: distance [m], 99th percentile and maximum of the distance over the last --hold-last s [m].
 RUN_KEYS = ("t_conv", "t_conv_1cm", "iae", "final_distance", "hold_distance_p99",
             "hold_distance_max")
-
-
-class _OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a bad argument in one line and exits 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _ranges(text: str) -> tuple[float, float, float]:
@@ -58,7 +53,7 @@ def _ranges(text: str) -> tuple[float, float, float]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineParser(
+    parser = OneLineParser(
         prog="nfmr-montecarlo",
         description="Success rate, convergence-time and IAE distributions of the DLSMC over "
                     "random starts around the trajectory's start, on the kinematic model or "
@@ -120,7 +115,7 @@ def run_start(task: tuple) -> dict:
 def run_per_start(tasks: list, jobs: int, progress) -> dict:
     """:func:`run_start` of every task on ``jobs`` processes; RUN_KEYS -> array in task order."""
     rows = [None] * len(tasks)
-    with ProcessPoolExecutor(max_workers=jobs, initializer=quiet_stdout) as pool:
+    with worker_pool(jobs, quiet_stdout) as pool:
         futures = {pool.submit(run_start, task): k for k, task in enumerate(tasks)}
         for done, future in enumerate(as_completed(futures), 1):
             k = futures[future]
@@ -251,9 +246,15 @@ def _print_summary(summary: dict, time_key: str, criterion: str, elapsed: float)
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-montecarlo``."""
+    return run_command("nfmr-montecarlo", _run, argv)
+
+
+def _run(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _check_arguments(parser, args)
+    if args.plots:
+        check_writable(parser, args.plots, "--plots", directory=True)
     try:
         params = controller_params(load_params_file(args.params) if args.params else {})
     except (ParameterError, ParamsFileError) as exc:
@@ -298,7 +299,7 @@ def main(argv=None) -> int:
         paths = plot(starts, origin, runs[time_key], success, label, args.plots)
         print(f"plots: {', '.join(map(str, paths))}", file=sys.stderr)
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(json_ready(summary)))
     else:
         _print_summary(summary, time_key, criterion, elapsed)
     return 0

@@ -37,7 +37,8 @@ class BtintsmcOuterLoop:
     """
 
     __slots__ = ("_gains", "_r2", "_r3", "_started", "_ex0", "_ey0", "_int_ax", "_int_ay",
-                 "_adaptive", "_zone", "_x_e", "_y_e", "C1", "C2", "s_x", "s_y", "alpha_x", "alpha_y")
+                 "_adaptive", "_zone", "_x_e", "_y_e", "C1", "C2", "s_x", "s_y", "alpha_x",
+                 "alpha_y")
 
     def __init__(self, gains: OuterLoopGains):
         self._started = False

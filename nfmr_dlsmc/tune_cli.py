@@ -25,6 +25,8 @@ import numpy as np
 import yaml
 
 from nfmr_dlsmc.batch_sim import PER_ROBOT_GAINS, simulate_batch_parallel
+from nfmr_dlsmc.cli_common import (OneLineParser, check_not_shipped, check_writable, json_ready,
+                                   run_command)
 from nfmr_dlsmc.params import ParamsFileError, controller_params, load_params_file
 from nfmr_dlsmc.validation import ParameterError
 
@@ -34,7 +36,7 @@ SEARCH_RANGES = {"C1": (0.3, 1.6), "C2": (0.3, 1.6), "k2": (0.2, 5.0), "xi": (0.
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="nfmr-tune", description=__doc__.split("\n")[0])
+    parser = OneLineParser(prog="nfmr-tune", description=__doc__.split("\n")[0])
     parser.add_argument("--candidates", type=int, default=300)
     parser.add_argument("--finalists", type=int, default=8)
     parser.add_argument("--screen-starts", type=int, default=60,
@@ -48,7 +50,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="C1:C2 fixed, adapted to the initial error, or candidates of "
                              "both kinds (default: fixed)")
     parser.add_argument("--params", metavar="FILE.yaml", help="starting parameter file")
-    parser.add_argument("--out", type=Path, default=Path("config/tuned_outer.yaml"))
+    parser.add_argument("--out", type=Path, default=Path("tuned_outer.yaml"),
+                        help="parameter file to write (default tuned_outer.yaml here; the "
+                             "shipped config/tuned_outer.yaml only with --force)")
+    parser.add_argument("--force", action="store_true",
+                        help="allow --out to replace a parameter file shipped with nfmr")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
                         help="processes sharing each batch (default: all cores)")
@@ -61,8 +67,14 @@ def _starts(rng, origin, half, n):
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-tune``."""
+    return run_command("nfmr-tune", _run, argv)
+
+
+def _run(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    check_writable(parser, args.out, "--out")
+    check_not_shipped(parser, args.out, "--out", args.force)
     for name in ("candidates", "finalists", "screen_starts", "n", "jobs"):
         if getattr(args, name) < 1:
             parser.error(f"argument --{name.replace('_', '-')}: must be >= 1")
@@ -127,7 +139,7 @@ def main(argv=None) -> int:
     args.out.write_text("# Written by nfmr-tune: outer-loop gains, paper inner loop and limits.\n"
                         f"# {json.dumps(report)}\n" + yaml.safe_dump(doc, sort_keys=False))
     if args.json:
-        print(json.dumps(report))
+        print(json.dumps(json_ready(report)))
     else:
         print("tuned outer gains: " + ", ".join(f"{k} = {v:.4g}" for k, v in gains.items()
                                                 if k != "adaptive_ratio")

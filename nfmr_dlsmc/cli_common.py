@@ -1,0 +1,77 @@
+"""What every command line shares: one-line errors, strict JSON, a quiet end on a closed
+stdout or Ctrl-C, and output paths checked before the long work starts."""
+
+import argparse
+import math
+import os
+import signal
+import sys
+import tempfile
+from pathlib import Path
+
+from nfmr_dlsmc.params import shipped_config
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a bad argument in one line and exits 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def json_ready(value):
+    """Non-finite floats as null (JSON has no NaN or Infinity), through dicts, lists and
+    tuples; finite ones keep their shortest round-trip form."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    return value
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def run_command(prog: str, body, argv=None) -> int:
+    """``body(argv)`` -> exit code, ending quietly on a closed stdout (``| head``: 0) and on
+    Ctrl-C or SIGTERM (one line, 130)."""
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return body(argv)
+    except BrokenPipeError:
+        # Python flushes stdout again at exit: point it at /dev/null first.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        print(f"\n{prog}: interrupted", file=sys.stderr)
+        return 130
+
+
+def check_writable(parser: argparse.ArgumentParser, path: Path, option: str,
+                   directory: bool = False) -> None:
+    """Refuse, before any work, an output that cannot be written: create the directory
+    (``directory``: ``path`` itself, else its parent) and a scratch file in it, as the
+    permission bits alone do not tell (root ignores them, /proc refuses anyway)."""
+    path = Path(path)
+    if not directory and path.is_dir():
+        parser.error(f"{option} {path}: is a directory, expected a file")
+    folder = path if directory else path.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        parser.error(f"{option} {path}: not writable ({exc.strerror or exc})")
+
+
+def check_not_shipped(parser: argparse.ArgumentParser, path: Path, option: str,
+                      force: bool) -> None:
+    """Refuse to write over a parameter file shipped with the package (``config/``, in the
+    source tree or installed) unless ``force`` (``--force``) says so."""
+    shipped = shipped_config(Path(path).name)
+    if not force and Path(path).resolve() == shipped.resolve() and shipped.exists():
+        parser.error(f"{option} {path} is a file shipped with nfmr; write elsewhere or add "
+                     "--force to replace it")

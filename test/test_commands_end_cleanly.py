@@ -1,0 +1,61 @@
+"""Every long command: outputs checked before the work, shipped files never overwritten
+unless asked, Ctrl-C and SIGTERM end it at once with exit 130 and no traceback."""
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+ROOT = Path(__file__).parents[1]
+
+
+def run(*args, timeout=60):
+    return subprocess.run([str(BIN / args[0]), *args[1:]], capture_output=True, text=True,
+                          timeout=timeout, cwd=ROOT)
+
+
+@pytest.mark.parametrize("command, args", [
+    ("nfmr-compare", ["--out", "/proc/nfmr-report"]),
+    ("nfmr-montecarlo", ["--n", "2", "--plots", "/proc/nfmr-plots"]),
+    ("nfmr-tune", ["--candidates", "2", "--out", "/proc/nfmr/tuned.yaml"]),
+    ("nfmr-tune-baselines", ["--budget", "1", "--out", "/proc/nfmr/comparison.yaml"]),
+])
+def test_an_unwritable_output_is_refused_before_any_work(command, args):
+    start = time.monotonic()
+    proc = run(command, *args)
+    assert proc.returncode == 2 and "not writable" in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert time.monotonic() - start < 10.0  # nothing was computed
+
+
+@pytest.mark.parametrize("command, shipped", [("nfmr-tune", "config/tuned_outer.yaml"),
+                                              ("nfmr-tune-baselines", "config/comparison.yaml")])
+def test_a_shipped_file_is_replaced_only_with_force(command, shipped):
+    before = (ROOT / shipped).read_bytes()
+    proc = run(command, "--out", shipped)
+    assert proc.returncode == 2 and "shipped with nfmr" in proc.stderr
+    assert "--force" in proc.stderr
+    assert (ROOT / shipped).read_bytes() == before
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("command, args", [
+    ("nfmr-montecarlo", ["--plant", "pybullet", "--n", "8", "--duration", "60", "--jobs", "2"]),
+    ("nfmr-compare", ["--plant", "pybullet", "--out", "{tmp}/report", "--jobs", "2"]),
+])
+def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, sig):
+    proc = subprocess.Popen([str(BIN / command), *(a.format(tmp=tmp_path) for a in args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    time.sleep(4.0)  # the workers are running pybullet
+    sent = time.monotonic()
+    proc.send_signal(sig)
+    _, stderr = proc.communicate(timeout=30)
+    assert time.monotonic() - sent < 5.0
+    assert proc.returncode == 130 and "interrupted" in stderr
+    assert "Traceback" not in stderr
+    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
+    assert children.stdout.strip() == ""  # no worker left behind
