@@ -22,8 +22,13 @@ $(STAMP): setup.py setup.cfg package.xml
 	ln -sf ../../bin/controller $(PKG_LIB)/controller
 	ln -sf ../../bin/sim $(PKG_LIB)/sim
 	cp resource/nfmr_dlsmc $(INDEX)/nfmr_dlsmc
-	ln -sfn $(CURDIR)/package.xml $(PKG_SHARE)/package.xml
-	ln -sfn $(CURDIR)/config $(PKG_SHARE)/config
+	# Relative links: the clone may move; `source .venv/bin/activate` sets AMENT_PREFIX_PATH
+	# as a ROS install's setup script does.
+	ln -sfn $$(realpath -m --relative-to=$(PKG_SHARE) package.xml) $(PKG_SHARE)/package.xml
+	ln -sfn $$(realpath -m --relative-to=$(PKG_SHARE) config) $(PKG_SHARE)/config
+	grep -q AMENT_PREFIX_PATH $(BIN)/activate || printf '%s\n' \
+	    'export AMENT_PREFIX_PATH="$$VIRTUAL_ENV$${AMENT_PREFIX_PATH:+:$$AMENT_PREFIX_PATH}"' \
+	    >> $(BIN)/activate
 	touch $(STAMP)
 
 run: setup

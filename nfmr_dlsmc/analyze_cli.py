@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from nfmr_dlsmc.bag_reader import BagError, read_bag
+from nfmr_dlsmc.cli_common import OneLineParser, json_ready, run_command
 from nfmr_dlsmc.metrics import HOLD_FROM
 from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, STATE_TOPIC, metrics_table, plot_runs,
                                      state_metrics, state_series, steer_joint_rates)
@@ -19,7 +20,7 @@ def _label(path: Path) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="nfmr-analyze",
         description="Metrics (IAE, ISE, STD, convergence time, ...) of rosbag2 MCAP bags that "
                     f"hold {STATE_TOPIC}; several bags are compared in one table.")
@@ -52,6 +53,10 @@ def analyze(paths, hold_from: float = HOLD_FROM) -> list[dict]:
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-analyze``; exit 2 with one line on an unreadable bag."""
+    return run_command("nfmr-analyze", _run, argv)
+
+
+def _run(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not args.hold_from >= 0.0:
@@ -65,8 +70,9 @@ def main(argv=None) -> int:
         paths = plot_runs([(r["label"], r["series"]) for r in results], args.plots)
         print(f"plots: {', '.join(str(p) for p in paths)}", file=sys.stderr)
     if args.json:
-        print(json.dumps({"bags": [{"path": r["path"], "truncated": r["truncated"],
-                                    "metrics": r["metrics"].as_dict()} for r in results]}))
+        print(json.dumps(json_ready({"bags": [{"path": r["path"], "truncated": r["truncated"],
+                                               "metrics": r["metrics"].as_dict()}
+                                              for r in results]})))
     else:
         print(metrics_table([(r["label"], r["metrics"]) for r in results]))
     return 0

@@ -27,3 +27,19 @@ def test_executables_sit_in_lib_of_the_package_and_run():
         proc = subprocess.run([str(exe), "--ros-args", "-p", arg], capture_output=True,
                               text=True, timeout=60)
         assert proc.returncode == 2 and needle in proc.stderr
+
+
+def test_activating_the_environment_is_sourcing_a_ros_install():
+    # `source .venv/bin/activate` sets AMENT_PREFIX_PATH, so ament_index resolves the
+    # package without anything else; the share entries do not name the clone's path.
+    env = {k: v for k, v in os.environ.items() if k != "AMENT_PREFIX_PATH"}
+    script = ("source bin/activate && python -c 'from ament_index_python.packages import "
+              "get_package_prefix as p; print(p(\"nfmr_dlsmc\"))'")
+    proc = subprocess.run(["bash", "-c", script], capture_output=True, text=True, timeout=60,
+                          cwd=PREFIX, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert Path(proc.stdout.strip()) == PREFIX
+    share = PREFIX / "share" / "nfmr_dlsmc"
+    for entry in ("package.xml", "config"):
+        assert not os.readlink(share / entry).startswith("/")
+        assert (share / entry).exists()
