@@ -184,8 +184,8 @@ def _run(argv) -> int:
     args = parser.parse_args(argv)
     if args.budget < 1 or args.jobs < 1:
         parser.error("--budget and --jobs must be >= 1")
-    check_writable(parser, args.out, "--out")
     check_not_shipped(parser, args.out, "--out", args.force)
+    check_writable(parser, args.out, "--out")
     begin = time.perf_counter()
 
     def progress(done, total):

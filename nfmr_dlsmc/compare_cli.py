@@ -158,7 +158,6 @@ def _run(argv) -> int:
     args = parser.parse_args(argv)
     if args.jobs < 1:
         parser.error("--jobs must be >= 1")
-    check_writable(parser, args.out, "--out", directory=True)
     gains_path = args.gains or default_gains_file()
     names = list(dict.fromkeys(["dlsmc", *args.controllers]))
     try:
@@ -167,6 +166,7 @@ def _run(argv) -> int:
             build_controller(name, blocks.get(name))  # every gain checked before any run
     except ParameterError as exc:
         parser.error(str(exc))
+    check_writable(parser, args.out, "--out", directory=True)  # after the checks, before the runs
     tasks = comparison_tasks(names, blocks, args.plant, args.duration)
     begin = time.perf_counter()
 

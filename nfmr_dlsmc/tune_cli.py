@@ -73,8 +73,8 @@ def main(argv=None) -> int:
 def _run(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    check_writable(parser, args.out, "--out")
     check_not_shipped(parser, args.out, "--out", args.force)
+    check_writable(parser, args.out, "--out")
     for name in ("candidates", "finalists", "screen_starts", "n", "jobs"):
         if getattr(args, name) < 1:
             parser.error(f"argument --{name.replace('_', '-')}: must be >= 1")
