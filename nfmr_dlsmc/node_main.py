@@ -57,6 +57,11 @@ def run_node(prog: str, factory, args=None) -> int:
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        # A callback caught publishing while SIGINT/SIGTERM shut the context down raises
+        # "publisher's context is invalid": that is the shutdown, not a failure.
+        if rclpy.ok():
+            raise
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
