@@ -15,7 +15,7 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import rclpy
@@ -31,6 +31,7 @@ from nfmr_dlsmc.params import (ParamsFileError, controller_params, load_params_f
                                shipped_config)
 from nfmr_dlsmc.pybullet_plant import simulate_pybullet
 from nfmr_dlsmc.recorder_node import RecorderNode
+from nfmr_dlsmc.steering import steer_angle_series
 from nfmr_dlsmc.bag_reader import read_bag
 from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, STEER_FIELDS, metrics_table, plot_runs,
                                      state_metrics, state_series, steer_joint_rates)
@@ -306,6 +307,14 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float,
     print(file=sys.stderr)
 
 
+def kinematic_run(params, x0, duration: float):
+    """The run on the kinematic model, with the steer angles the mapping would command."""
+    run = simulate(DlsmcController(params.dlsmc), params.trajectory, x0, duration,
+                   params.dlsmc.dt)
+    return replace(run, steer=steer_angle_series(run.v, run.omega, params.geometry,
+                                                 params.steering))
+
+
 def report(bag_dir, run_dir, params, settings, args, counts) -> None:
     """Print the metrics table (the ROS run, and unless ``--no-compare`` the same scenario
     on the in-process pybullet plant and the kinematic model) and write plots."""
@@ -320,8 +329,7 @@ def report(bag_dir, run_dir, params, settings, args, counts) -> None:
         plants = (("in-process pybullet", simulate_pybullet(
                       DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
                       args.duration, settings.world, params.geometry, params.steering)),
-                  ("kinematic", simulate(DlsmcController(params.dlsmc), params.trajectory,
-                                         settings.initial_pose, args.duration, params.dlsmc.dt)))
+                  ("kinematic", kinematic_run(params, settings.initial_pose, args.duration)))
         for label, sim in plants:
             columns.append((label, simulation_metrics(sim, args.hold_from)))
             plotted = {"t": sim.t, "x": sim.state[:, 0], "y": sim.state[:, 1],
