@@ -83,7 +83,8 @@ class ControllerNode(Node):
         self._stats = LoopStats(overrun_threshold=2.0 * params.dlsmc.dt)
         self._state_layout = [MultiArrayDimension(label=",".join(STATE_FIELDS),
                                                   size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
-        self._loop = LoopThread(self._clock_loop, "dlsmc-1khz")
+        self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
+        self._loop = LoopThread(self._clock_loop, "dlsmc-1khz", node=self)
         self.create_timer(values["watchdog_period"], self._watchdog)
         self.create_timer(1.0, self._publish_diagnostics)
         self.ticks = 0

@@ -3,6 +3,8 @@ with one line naming the problem (exit code 2) instead of a traceback."""
 
 import sys
 import threading
+import traceback
+from pathlib import Path
 
 import rclpy
 import yaml
@@ -53,6 +55,7 @@ def run_node(prog: str, factory, args=None) -> int:
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     node.start()
+    code = 0
     try:
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -63,25 +66,56 @@ def run_node(prog: str, factory, args=None) -> int:
         if rclpy.ok():
             raise
     finally:
+        failure = getattr(node, "failure", None)
         node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    if failure:
+        print(f"{prog}: {failure}", file=sys.stderr)
+        code = 1
+    return code
+
+
+def describe_failure(exc: BaseException) -> str:
+    """``Type: message (at package/file.py:line in function)`` of an exception."""
+    where = ""
+    frames = traceback.extract_tb(exc.__traceback__)
+    if frames:
+        last = frames[-1]
+        where = f" (at {'/'.join(Path(last.filename).parts[-2:])}:{last.lineno} in {last.name})"
+    return f"{type(exc).__name__}: {exc}{where}"
 
 
 class LoopThread:
-    """A node's background loop: ``target`` runs in a daemon thread while ``running`` is set."""
+    """A node's background loop: ``target`` runs in a daemon thread while ``running`` is set.
 
-    def __init__(self, target, name: str):
+    With ``node``, a failure of the loop is fatal to the node: ``node.failure`` is set to
+    "<name> failed: <describe_failure>", it is logged as fatal and the node's context is shut
+    down, which ends :func:`run_node` with exit code 1 naming it — a node whose loop died
+    must not live on publishing nothing.
+    """
+
+    def __init__(self, target, name: str, node=None):
         self._target = target
         self._name = name
+        self._node = node
         self.running = threading.Event()
         self._thread = None
 
     def start(self) -> None:
         """Start the loop thread."""
         self.running.set()
-        self._thread = threading.Thread(target=self._target, name=self._name, daemon=True)
+        body = self._target if self._node is None else self._fatal_on_failure
+        self._thread = threading.Thread(target=body, name=self._name, daemon=True)
         self._thread.start()
+
+    def _fatal_on_failure(self) -> None:
+        try:
+            self._target()
+        except Exception as exc:  # any failure: the loop is what the node is for
+            node = self._node
+            node.failure = f"{self._name} thread failed: {describe_failure(exc)}"
+            node.get_logger().fatal(f"{node.failure}; shutting down")
+            node.context.try_shutdown()
 
     def stop(self) -> None:
         """Ask the loop to end and wait for it (idempotent)."""

@@ -19,8 +19,6 @@ down and ``sim`` exits with code 1 naming the error.
 import sys
 import threading
 import time
-import traceback
-from pathlib import Path
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
@@ -52,16 +50,6 @@ LIVE_PARAMETERS = ("lockstep_timeout", "command_timeout", "aux_publish_every", "
 def _plain(value):
     """A parameter value as plain Python (arrays as lists)."""
     return value.tolist() if hasattr(value, "tolist") else value
-
-
-def describe_failure(exc: BaseException) -> str:
-    """``Type: message (at package/file.py:line in function)`` of an exception."""
-    where = ""
-    frames = traceback.extract_tb(exc.__traceback__)
-    if frames:
-        last = frames[-1]
-        where = f" (at {'/'.join(Path(last.filename).parts[-2:])}:{last.lineno} in {last.name})"
-    return f"{type(exc).__name__}: {exc}{where}"
 
 
 class SimNode(Node):
@@ -98,9 +86,9 @@ class SimNode(Node):
         self._pending = None  # settings of an accepted live change, for the next step
         self._pending_lock = threading.Lock()
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        self._stepper = LoopThread(self._step_thread, "sim-step")
+        self._stepper = LoopThread(self._loop, "step", node=self)
         self.steps = 0
-        self.failure = None  # describe_failure() of the exception that ended stepping
+        self.failure = None  # what ended stepping, set by the step thread (LoopThread)
 
     def _on_twist(self, msg: Twist) -> None:
         self.gate.offer_twist(msg.linear.x, msg.linear.y, msg.angular.z, self.world.time)
@@ -155,16 +143,6 @@ class SimNode(Node):
     def stop(self) -> None:
         """Stop stepping and wait for the thread (idempotent)."""
         self._stepper.stop()
-
-    def _step_thread(self) -> None:
-        """Step; a failure is fatal: recorded in ``failure``, logged, and the node's context
-        shut down, which ends its executor (``main`` then exits with code 1)."""
-        try:
-            self._loop()
-        except Exception as exc:  # any failure: a sim that no longer steps must not live on
-            self.failure = describe_failure(exc)
-            self.get_logger().fatal(f"step thread failed: {self.failure}; shutting down")
-            self.context.try_shutdown()
 
     def _loop(self) -> None:
         s = self.settings
@@ -234,17 +212,7 @@ def main(args=None) -> int:
 
     Returns 0 after a normal shutdown, 2 for bad parameters, 1 if stepping failed.
     """
-    nodes = []
-
-    def create():
-        nodes.append(SimNode())
-        return nodes[-1]
-
-    code = run_node("sim", create, args)
-    if nodes and nodes[-1].failure:
-        print(f"sim: step thread failed: {nodes[-1].failure}", file=sys.stderr)
-        return 1
-    return code
+    return run_node("sim", SimNode, args)
 
 
 if __name__ == "__main__":
