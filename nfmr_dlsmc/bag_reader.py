@@ -16,8 +16,9 @@ from zstandard import ZstdError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 #: What reading a cut or corrupted record raises: its length runs past the end (EOFError,
-#: struct.error), its fields or compressed chunk do not decode (McapError, ValueError,
-#: KeyError, zstandard's ZstdError).
+#: struct.error), its fields or compressed chunk do not decode or fail their CRC (McapError,
+#: ValueError, KeyError, zstandard's ZstdError). Chunk CRCs are checked, so corrupted bytes
+#: end the bag instead of turning into wrong messages.
 _CUT_OR_CORRUPT = (McapError, EOFError, ValueError, KeyError, struct.error, ZstdError)
 
 
@@ -113,7 +114,7 @@ def iter_bag(path, topics=None, contents: BagContents | None = None):
         size = file.stat().st_size
         schemas, channels = {}, {}
         position = 0
-        reader = StreamReader(stream, record_size_limit=1 << 31)
+        reader = StreamReader(stream, record_size_limit=1 << 31, validate_crcs=True)
         try:
             for record in reader.records:
                 if isinstance(record, Schema):

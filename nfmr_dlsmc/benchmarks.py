@@ -14,13 +14,13 @@
   odometry -> command latency across processes, resident memory, bag writer throughput.
 """
 
-import argparse
 import json
 import os
 import time
 
 import numpy as np
 
+from nfmr_dlsmc.cli_common import OneLineParser, json_ready, run_command
 from nfmr_dlsmc.dlsmc import DlsmcController
 from nfmr_dlsmc.kinematic_sim import simulate
 from nfmr_dlsmc.trajectories import make_trajectory
@@ -114,7 +114,11 @@ def batch_robot_steps(n: int = 500, seconds: float = 10.0, jobs: int = 1) -> dic
 
 def main(argv=None) -> int:
     """Run the benchmarks, print a table and optionally write JSON."""
-    parser = argparse.ArgumentParser(prog="nfmr-bench", description=__doc__.split("\n")[0])
+    return run_command("nfmr-bench", _run, argv)
+
+
+def _run(argv) -> int:
+    parser = OneLineParser(prog="nfmr-bench", description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--json", metavar="FILE")
     parser.add_argument("--sim-seconds", type=float, default=20.0,
@@ -175,9 +179,9 @@ def main(argv=None) -> int:
             print(f"{'resident memory ' + name + ' [MB]':<44} {mb:>12.1f}")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"kinematic_scalar": kin, "controller_tick": tick, "sim_world": world,
-                       "pybullet_closed_loop": closed, "batch": batch, "nodes": nodes},
-                      fh, indent=2)
+            figures = {"kinematic_scalar": kin, "controller_tick": tick, "sim_world": world,
+                       "pybullet_closed_loop": closed, "batch": batch, "nodes": nodes}
+            json.dump(json_ready(figures), fh, indent=2)
     return 0
 
 

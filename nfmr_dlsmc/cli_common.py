@@ -75,3 +75,23 @@ def check_not_shipped(parser: argparse.ArgumentParser, path: Path, option: str,
     if not force and Path(path).resolve() == shipped.resolve() and shipped.exists():
         parser.error(f"{option} {path} is a file shipped with nfmr; write elsewhere or add "
                      "--force to replace it")
+
+
+#: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
+#: measured; rounded up) [bytes].
+RECORDED_STEP_BYTES = 1024
+#: Memory one robot of the vectorised batch simulator takes (its ~30 state and metric
+#: arrays of float64, twice for temporaries) [bytes].
+BATCH_ROBOT_BYTES = 512
+
+
+def check_memory(parser: argparse.ArgumentParser, needed: float, what: str) -> None:
+    """Refuse, before any work, a request that needs more memory than is available:
+    ``needed`` [bytes] for ``what`` (named in the message, e.g. "--duration 1e9 s")."""
+    try:
+        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError):
+        return
+    if needed > available:
+        parser.error(f"{what} needs about {needed / 2**30:.3g} GiB of memory; "
+                     f"{available / 2**30:.3g} GiB are available")

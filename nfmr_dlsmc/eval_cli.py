@@ -4,12 +4,12 @@ the metrics."""
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from dataclasses import replace
 
-from nfmr_dlsmc.cli_common import OneLineParser, json_ready, run_command
+from nfmr_dlsmc.cli_common import (RECORDED_STEP_BYTES, OneLineParser, check_memory,
+                                   json_ready, run_command)
 from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
@@ -159,25 +159,14 @@ def _is_paper_case1(args, params: ControllerParams, trajectory) -> bool:
             and params == ControllerParams() and trajectory == make_trajectory("sine"))
 
 
-#: Memory one simulated step takes while a run is recorded and measured [bytes] (measured:
-#: ~0.7 kB for the recorded row and its arrays; rounded up).
-BYTES_PER_STEP = 1024
-
-
 def _check_length(parser, duration: float, dt: float) -> None:
     """At least one step, and few enough that the recorded run fits in memory."""
     steps = round(duration / dt)
     if steps < 1:
         parser.error(f"--duration {duration:g} s is shorter than one control period "
                      f"({dt:g} s)")
-    try:
-        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError):
-        return
-    if steps * BYTES_PER_STEP > available:
-        parser.error(f"--duration {duration:g} s is {steps:.3g} steps of {dt:g} s and needs "
-                     f"about {steps * BYTES_PER_STEP / 2**30:.3g} GiB of memory; "
-                     f"{available / 2**30:.3g} GiB are available")
+    check_memory(parser, steps * RECORDED_STEP_BYTES,
+                 f"--duration {duration:g} s ({steps:.3g} steps of {dt:g} s)")
 
 
 def main(argv=None) -> int:

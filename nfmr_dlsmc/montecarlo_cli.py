@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from nfmr_dlsmc.batch_sim import simulate_batch_parallel
-from nfmr_dlsmc.cli_common import OneLineParser, check_writable, json_ready, run_command
+from nfmr_dlsmc.cli_common import (BATCH_ROBOT_BYTES, RECORDED_STEP_BYTES, OneLineParser,
+                                   check_memory, check_writable, json_ready, run_command)
 from nfmr_dlsmc.compare_cli import quiet_stdout
 from nfmr_dlsmc.comparison_scenarios import PLANTS
 from nfmr_dlsmc.disturbances import disturbance_by_name
@@ -204,6 +205,10 @@ def _check_arguments(parser, args) -> None:
         parser.error(f"argument --duration: must be > 0, got {args.duration}")
     if not (math.isfinite(args.hold_last) and args.hold_last > 0.0):
         parser.error(f"argument --hold-last: must be > 0, got {args.hold_last}")
+    steps = round(args.duration / 0.001)  # at the paper's period; a --params period is close
+    check_memory(parser, max(args.n * BATCH_ROBOT_BYTES,
+                             min(args.jobs, args.n) * steps * RECORDED_STEP_BYTES),
+                 f"--n {args.n} starts of --duration {args.duration:g} s")
 
 
 def _world(parser, args, dt: float):

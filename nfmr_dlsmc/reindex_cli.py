@@ -6,11 +6,12 @@ from pathlib import Path
 
 from nfmr_dlsmc.bag_reader import BagError
 from nfmr_dlsmc.bag_reindex import reindex
+from nfmr_dlsmc.cli_common import OneLineParser, run_command
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``nfmr-reindex`` command line."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="nfmr-reindex",
         description="Rebuild rosbag2 MCAP bags cut by a killed recorder (no summary, no "
                     "metadata.yaml) from their complete chunks, as `ros2 bag reindex` does; "
@@ -23,6 +24,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Entry point of ``nfmr-reindex``; one line per bag, exit 2 on the first unusable one."""
+    return run_command("nfmr-reindex", _run, argv)
+
+
+def _run(argv) -> int:
     args = build_parser().parse_args(argv)
     for path in args.bags:
         try:

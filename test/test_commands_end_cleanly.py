@@ -59,3 +59,15 @@ def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, s
     assert "Traceback" not in stderr
     children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
     assert children.stdout.strip() == ""  # no worker left behind
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["nfmr-montecarlo", "--n", "1000000000"], "--n 1000000000 starts"),
+    (["nfmr-montecarlo", "--n", "4", "--duration", "1e9"], "--duration 1e+09 s"),
+    (["nfmr-eval", "--duration", "1e9"], "--duration 1e+09 s"),
+])
+def test_a_request_too_large_for_memory_is_refused_at_once(args, needle):
+    start = time.monotonic()
+    proc = run(*args)
+    assert proc.returncode == 2 and needle in proc.stderr and "GiB of memory" in proc.stderr
+    assert time.monotonic() - start < 10.0
