@@ -16,7 +16,7 @@ class CascadeController:
     2. position loop ``outer.step(x_e, y_e, xdot_d, ydot_d, dt) -> (u_x, u_y)``;
        v = sqrt(u_x^2 + u_y^2) and theta_d = atan2(u_y, u_x) (eq. 40);
     3. thetadot_d as the backward difference of the wrapped theta_d over the step
-       (doc/design.md; 0 at the first step), optionally low-pass filtered with time
+       (doc/design.md, D5; 0 at the first step), optionally low-pass filtered with time
        constant ``filter_tau`` (0: the raw difference); or, with ``analytic_rate``, the
        derivative of eq. (40)
 

@@ -270,7 +270,7 @@ def difference_notes(document: dict) -> list[str]:
         notes.append(
             "- **Chattering of the cascades.** Once converged, the discrete terminal terms keep "
             "the position error at the micrometre level and theta_d = atan2(u_y, u_x) swings "
-            "with it; the backward difference thetadot_d (design.md point 5) turns that into "
+            "with it; the backward difference thetadot_d (doc/design.md, D5) turns that into "
             f"a commanded omega beyond the limit on {100.0 * dl1['omega_raw_over_limit']:.1f}% "
             f"of the DLSMC's steps (total variation {_num(dl1['omega_raw_tv'], 0)} rad/s² over "
             "the second half). The laws with a boundary layer or no thetadot_d stay smooth. "

@@ -27,7 +27,7 @@ class OuterLoopGains:
     k2 : float
         Reaching gain [m^(1 - q3/p3)/s] of the terminal term (eqs 34, 35).
     h : float
-        Slope of erf in the reaching term [1/m] (design.md point 4: h = 1).
+        Slope of erf in the reaching term [1/m] (doc/design.md, D4: h = 1).
     xi : float
         Boundary between the full-speed and the stable-tracking phase [m] (eq. 33).
     p2, q2 : int
@@ -197,7 +197,7 @@ class DlsmcConfig:
         Control period [s] (paper: 1 ms).
     thetadot_filter : float
         Time constant [s] of a first-order low-pass on the backward-difference thetadot_d;
-        0 (default) uses the raw difference as the paper does (doc/design.md).
+        0 (default) uses the raw difference as the paper does (doc/design.md, D5).
     thetadot_source : str
         ``difference`` (default, the paper): thetadot_d is the backward difference of the
         wrapped theta_d over the step. ``analytic`` (robot profile): thetadot_d is the time

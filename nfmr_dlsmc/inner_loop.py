@@ -11,7 +11,7 @@ BARRIER_PHASE = 1
 
 
 class AbfsmcInnerLoop:
-    """ABFSMC law of eqs (10)-(13) with the barrier fallback of design.md point 6.
+    """ABFSMC law of eqs (10)-(13) with the barrier fallback of doc/design.md, D6.
 
     With s_theta = theta_e (eq. 10) the yaw-rate command is (eq. 11)
 

@@ -37,7 +37,7 @@ class ReferenceRates:
 
     v_r = sqrt(xdot_d^2 + ydot_d^2) (eq. 6), theta_r = atan2(ydot_d, xdot_d) (eq. 7);
     omega_r and v_r' are backward differences over the step (0 at the first step), as
-    theta_d' is in the DLSMC (design.md point 5), so every law sees the same interface:
+    theta_d' is in the DLSMC (doc/design.md, D5), so every law sees the same interface:
     the reference position and velocity at this instant.
     """
 

@@ -6,7 +6,7 @@ _TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
 
 
 def sig_pow(s: float, r: float) -> float:
-    """sign(s) |s|^r: the sign-preserving power s^(q/p) for odd q, p (design.md point 7)."""
+    """sign(s) |s|^r: the sign-preserving power s^(q/p) for odd q, p (doc/design.md, D7)."""
     if s >= 0.0:
         return s ** r
     return -((-s) ** r)

@@ -1,9 +1,9 @@
 """Four-wheel independent steering geometry: (v, omega) at P <-> steer angles and wheel speeds.
 
 Body frame (REP 103): x forward, y left, origin at the geometric centre of the chassis.
-Wheels are ordered front-left, front-right, rear-left, rear-right (design.md section 4).
+Wheels are ordered front-left, front-right, rear-left, rear-right (doc/design.md, conventions).
 
-Steer modes follow design.md points 1-3. With j1 = -tan(delta_r)/tan(delta_f):
+Steer modes follow doc/design.md, D1-D3. With j1 = -tan(delta_r)/tan(delta_f):
 j1 = 1 double Ackermann (rear counter-steers), j1 = 0 front-only Ackermann, j1 = -1 crab
 (all wheels parallel, no yaw). The paper's eq. (2) uses the effective wheelbase
 (j1 + j2) L; we require j1 + j2 = 1 so that it equals the real wheelbase L and eq. (2)
@@ -65,7 +65,7 @@ class SteerMode:
     Attributes
     ----------
     j1 : float
-        -tan(delta_r)/tan(delta_f), in [-1, 1] (design.md point 1).
+        -tan(delta_r)/tan(delta_f), in [-1, 1] (doc/design.md, D1).
     j2 : float
         Must equal 1 - j1.
     """
@@ -90,7 +90,7 @@ class SteerMode:
     def zero_slip_offset(self, wheelbase: float) -> float:
         """x_c = (L/2)(j1 - 1)/(j1 + 1) [m]: body-frame x of the point P with no side-slip.
 
-        This is the point whose pose the controller tracks (design.md point 2): the
+        This is the point whose pose the controller tracks (doc/design.md, D2): the
         geometric centre for j1 = 1, the rear axle for j1 = 0. Undefined for crab mode.
         """
         if self.is_crab:
@@ -153,7 +153,7 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
     """Steer angles and wheel speeds that realise the body twist (vx, vy, omega) at the centre.
 
     Wheel i at (x_i, y_i) moves at (vx - omega y_i, vy + omega x_i): perpendicular to its
-    radius from the instantaneous centre of rotation (design.md point 3). Its steer angle is
+    radius from the instantaneous centre of rotation (doc/design.md, D3). Its steer angle is
     the direction of that velocity folded into [-pi/2, pi/2] (a reversed wheel drives
     backwards) and its speed is |velocity| / wheel_radius.
 
@@ -186,7 +186,7 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
 
 def wheel_commands(v: float, omega: float, geometry: RobotGeometry, mode: SteerMode,
                    crab_angle: float = 0.0, hold_steer=None) -> WheelCommands:
-    """Unicycle inputs (v [m/s], omega [rad/s]) at P -> per-wheel commands (design.md 1-3)."""
+    """Unicycle inputs (v [m/s], omega [rad/s]) at P -> per-wheel commands (doc/design.md, D1-D3)."""
     vx, vy, w = centre_twist(v, omega, mode, geometry.wheelbase, crab_angle)
     return wheel_commands_for_twist(vx, vy, w, geometry, hold_steer)
 

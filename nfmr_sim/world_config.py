@@ -182,7 +182,7 @@ class WorldConfig:
     chassis, motors, friction, disturbance
         The parts above.
     steer_mode : SteerMode
-        Sets the tracked point P (design.md point 2) whose pose the odometry reports.
+        Sets the tracked point P (doc/design.md, D2) whose pose the odometry reports.
     physics_dt : float
         Physics step [s].
     """

@@ -43,3 +43,13 @@ def test_activating_the_environment_is_sourcing_a_ros_install():
     for entry in ("package.xml", "config"):
         assert not os.readlink(share / entry).startswith("/")
         assert (share / entry).exists()
+
+
+def test_docstrings_point_into_the_repository(request):
+    # Every reference to the design notes names doc/design.md, which is in the repository.
+    root = request.config.rootpath
+    assert (root / "doc" / "design.md").is_file()
+    for path in list((root / "nfmr_dlsmc").glob("*.py")) + list((root / "nfmr_sim").glob("*.py")):
+        text = path.read_text()
+        stray = text.replace("doc/design.md", "").count("design.md")
+        assert stray == 0, f"{path.name} points to a design.md outside doc/"
