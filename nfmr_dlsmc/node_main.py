@@ -7,9 +7,9 @@ import traceback
 from pathlib import Path
 
 import rclpy
-import yaml
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
+from nfmr_dlsmc.params import ParamsFileError, read_yaml
 from nfmr_dlsmc.validation import ParameterError
 
 
@@ -21,14 +21,9 @@ def params_files(args: list) -> list:
 def check_params_file(path: str) -> str | None:
     """Why a parameter file cannot be used (missing, unreadable, bad YAML), or None."""
     try:
-        with open(path) as fh:
-            yaml.safe_load(fh)
-    except OSError as exc:
-        return f"cannot read parameter file {path}: {exc.strerror}"
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        return f"{path}: YAML syntax error{where}: {getattr(exc, 'problem', exc)}"
+        read_yaml(path)
+    except ParamsFileError as exc:
+        return str(exc)
     return None
 
 

@@ -69,6 +69,28 @@ def flatten(mapping: dict, prefix: str = "") -> dict:
     return flat
 
 
+def read_yaml(path) -> object:
+    """The YAML document of a parameter file.
+
+    Raises
+    ------
+    ParamsFileError
+        The file cannot be read, or its YAML does not parse (with line and column).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ParamsFileError(f"cannot read parameter file {path}: {exc.strerror}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ParamsFileError(f"{path}: YAML syntax error{where}: "
+                              f"{getattr(exc, 'problem', exc)}") from None
+
+
 def load_params_file(path, node_name: str = "controller") -> dict:
     """Read the ``ros__parameters`` of ``node_name`` (or ``/**``) as a flat dict.
 
@@ -78,17 +100,7 @@ def load_params_file(path, node_name: str = "controller") -> dict:
         Missing file, YAML syntax error, or no ``ros__parameters`` for the node.
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ParamsFileError(f"cannot read parameter file {path}: {exc.strerror}") from None
-    try:
-        document = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ParamsFileError(f"{path}: YAML syntax error{where}: "
-                              f"{getattr(exc, 'problem', exc)}") from None
+    document = read_yaml(path)
     if not isinstance(document, dict):
         raise ParamsFileError(f"{path}: expected a mapping '<node>: ros__parameters: ...'")
     merged = {}
