@@ -19,6 +19,26 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
+def positive_number(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    return _number(text, lambda v: v > 0.0, "> 0")
+
+
+def non_negative_number(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    return _number(text, lambda v: v >= 0.0, ">= 0")
+
+
+def _number(text: str, rule, rule_text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and rule(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number {rule_text}, got {text!r}")
+    return value
+
+
 def json_ready(value):
     """Non-finite floats as null (JSON has no NaN or Infinity), through dicts, lists and
     tuples; finite ones keep their shortest round-trip form."""

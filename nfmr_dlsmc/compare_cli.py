@@ -5,7 +5,6 @@ model (3) or the pybullet chassis."""
 
 import argparse
 import json
-import math
 import os
 import sys
 import time
@@ -15,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nfmr_dlsmc.cli_common import OneLineParser, check_writable, json_ready, run_command
+from nfmr_dlsmc.cli_common import (OneLineParser, check_writable, json_ready, positive_number,
+                                   run_command)
 from nfmr_dlsmc.comparison_metrics import run_metrics
 from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS, SCENARIOS, run_scenario
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
@@ -115,16 +115,6 @@ def results_document(metrics: dict, plant: str) -> dict:
     return document
 
 
-def _duration(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="nfmr-compare", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=Path("report"),
@@ -133,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="kinematic: the unicycle model (3), as the paper (default); "
                              "pybullet: the simulated 4WIS chassis, in-process, without the "
                              "C1:C2 runs of Fig. 13")
-    parser.add_argument("--duration", type=_duration, default=CASE1_LONGITUDINAL.duration,
+    parser.add_argument("--duration", type=positive_number, default=CASE1_LONGITUDINAL.duration,
                         help="length of every run [s] (default 100, the paper's; shorter "
                              "for a quick look: the hold figures start at 15 s)")
     parser.add_argument("--gains", type=Path, default=None,

@@ -9,7 +9,8 @@ import time
 from dataclasses import replace
 
 from nfmr_dlsmc.cli_common import (RECORDED_STEP_BYTES, OneLineParser, check_memory,
-                                   json_ready, run_command)
+                                   json_ready, non_negative_number, positive_number,
+                                   run_command)
 from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
@@ -41,26 +42,6 @@ def _pose(text: str) -> tuple[float, float, float]:
     return pose
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
-    if not (math.isfinite(value) and value >= 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The ``nfmr-eval`` command line."""
     parser = OneLineParser(
@@ -83,15 +64,15 @@ def build_parser() -> argparse.ArgumentParser:
                              "--params file's trajectory, else sine)")
     parser.add_argument("--x0", type=_pose, default=(1.0, 4.0, 0.0),
                         help="initial pose x,y,theta [m,m,rad] (default 1,4,0)")
-    parser.add_argument("--duration", type=_positive, default=100.0, help="[s] (default 100)")
-    parser.add_argument("--dt", type=_positive, default=None,
+    parser.add_argument("--duration", type=positive_number, default=100.0, help="[s] (default 100)")
+    parser.add_argument("--dt", type=positive_number, default=None,
                         help="control and integration step [s] (default 0.001, or "
                              "1/control_rate of --params)")
     parser.add_argument("--disturbance", choices=("none", "paper"), default="none",
                         help="'paper': 0.5 rad/s yaw-rate pulses in [5, 5.5) s and [50, 50.5) s "
                              "(on pybullet added to the commanded omega before the wheel "
                              "mapping)")
-    parser.add_argument("--hold-from", type=_non_negative, default=HOLD_FROM, metavar="SECONDS",
+    parser.add_argument("--hold-from", type=non_negative_number, default=HOLD_FROM, metavar="SECONDS",
                         help=f"start of the window of the hold figures [s] (default {HOLD_FROM:g})")
     parser.add_argument("--params", metavar="FILE.yaml",
                         help="controller parameter file (ROS 2 layout, node 'controller')")
