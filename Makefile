@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.nfmr-installed
 
-.PHONY: setup run test bench report clean
+.PHONY: setup run test bench report clean mutate
 
 setup: $(STAMP)
 
@@ -42,6 +42,27 @@ bench: setup
 
 report: setup
 	$(BIN)/nfmr-compare --out report
+
+# Mutation testing of the core laws and guards with the fast tests (doc/mutation.md; the
+# [mutmut] section of setup.cfg says which modules and tests). Incremental: mutants/ keeps
+# the verdicts and only changed functions are tested again; `rm -rf mutants` starts over.
+# MUTANTS narrows the run, e.g. make mutate MUTANTS='nfmr_dlsmc.steering.*'.
+MUTATE_JOBS ?= 2
+MUTANTS     ?=
+MUTMUT      := $(BIN)/mutmut
+
+$(MUTMUT): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,mutate]'
+
+mutate: $(MUTMUT)
+	$(MUTMUT) run --max-children $(MUTATE_JOBS) $(MUTANTS)
+	$(MUTMUT) export-cicd-stats >/dev/null
+	@$(BIN)/python -c 'import json; s = json.load(open("mutants/mutmut-cicd-stats.json")); \
+	    c = s["killed"] + s["timeout"]; \
+	    print("mutation score: {c} of {total} mutants caught ({p:.1f} %): killed {killed}, timeout {timeout}, " \
+	          "survived {survived}, no tests {no_tests}, suspicious {suspicious}".format(c=c, p=100.0 * c / max(1, s["total"]), **s))'
+	@echo "not killed (mutmut show NAME for the diff):"
+	@$(MUTMUT) results
 
 clean:
 	rm -rf $(VENV) build *.egg-info

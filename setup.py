@@ -28,6 +28,7 @@ setup(
     extras_require={
         "test": ["pytest>=8,<10", "mcap-ros2-support>=0.5,<0.7", "rosbags>=0.10,<0.12",
                  "hypothesis>=6.100,<7"],
+        "mutate": ["mutmut>=3.8,<4"],
     },
     zip_safe=True,
     maintainer="nfmr developers",
