@@ -1,8 +1,6 @@
 """The controller node in-process with a real executor, over real DDS."""
 
 import math
-import subprocess
-import sys
 import time
 
 import numpy as np
@@ -269,33 +267,3 @@ def test_a_restarted_odometry_source_starts_tracking_over(setup):
     assert [s["stopped"] for s in restarted] == [1.0, 1.0, 0.0, 0.0, 0.0]
     assert [round(s["t"], 6) for s in restarted[2:]] == [0.002, 0.003, 0.004]
     assert node.session.restarts == 1
-
-
-# The controller's own main in a child process, ticking on its clock, whose tick fails at
-# the 100th call.
-FAILING_TICK = """
-import sys
-from nfmr_dlsmc import tracking_session
-from nfmr_dlsmc.controller_node import main
-
-tick = tracking_session.TrackingSession.tick
-calls = []
-
-def failing_tick(self, control_time, wall_time):
-    calls.append(control_time)
-    if len(calls) == 100:
-        raise RuntimeError("injected failure at tick 100")
-    return tick(self, control_time, wall_time)
-
-tracking_session.TrackingSession.tick = failing_tick
-sys.exit(main())
-"""
-
-
-def test_a_failing_clock_loop_ends_the_process_naming_the_error():
-    proc = subprocess.run([sys.executable, "-c", FAILING_TICK, "--ros-args", "-p",
-                           "tick_source:=clock"], capture_output=True, text=True, timeout=60)
-    assert proc.returncode == 1, proc.stderr
-    assert ("controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick "
-            "100 (at <string>:" in proc.stderr)
-    assert "Traceback" not in proc.stderr

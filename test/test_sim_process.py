@@ -75,10 +75,37 @@ sys.exit(main())
 """
 
 
-def test_a_failing_step_thread_ends_the_process_naming_the_error():
-    proc = subprocess.run([sys.executable, "-c", FAILING_STEP, "--ros-args", "-p",
-                           "mode:=realtime"], capture_output=True, text=True, timeout=60)
+# The controller's own main in a child process, ticking on its clock, whose tick fails at
+# the 100th call.
+FAILING_TICK = """
+import sys
+from nfmr_dlsmc import tracking_session
+from nfmr_dlsmc.controller_node import main
+
+tick = tracking_session.TrackingSession.tick
+calls = []
+
+def failing_tick(self, control_time, wall_time):
+    calls.append(control_time)
+    if len(calls) == 100:
+        raise RuntimeError("injected failure at tick 100")
+    return tick(self, control_time, wall_time)
+
+tracking_session.TrackingSession.tick = failing_tick
+sys.exit(main())
+"""
+
+
+@pytest.mark.parametrize("script, args, message", [
+    (FAILING_STEP, ["mode:=realtime"],
+     "sim: step thread failed: RuntimeError: injected failure at step 100 (at <string>:"),
+    (FAILING_TICK, ["tick_source:=clock"],
+     "controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick 100 "
+     "(at <string>:"),
+], ids=["sim step thread", "controller clock loop"])
+def test_a_failing_loop_thread_ends_the_node_naming_the_error(script, args, message):
+    proc = subprocess.run([sys.executable, "-c", script, "--ros-args", "-p", *args],
+                          capture_output=True, text=True, timeout=60)
     assert proc.returncode == 1, proc.stderr
-    assert ("sim: step thread failed: RuntimeError: injected failure at step 100 "
-            "(at <string>:" in proc.stderr)
+    assert message in proc.stderr
     assert "Traceback" not in proc.stderr
