@@ -3,12 +3,12 @@ Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses; on 
 kinematic model (3) or the pybullet chassis."""
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from nfmr_dlsmc.controllers import build_controller
 from nfmr_dlsmc.disturbances import YawRateDisturbance, paper_disturbance
-from nfmr_dlsmc.kinematic_sim import SimResult, simulate
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, steer_angle_series
+from nfmr_dlsmc.kinematic_sim import SimResult, simulate, with_steer_angles
+from nfmr_dlsmc.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.trajectories import make_trajectory
 
 #: The plants a scenario runs on: the unicycle model (3), forward Euler; the simulated
@@ -74,5 +74,4 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
                                  disturbance=scenario.disturbance)
     result = simulate(controller, trajectory, scenario.x0, scenario.duration, scenario.dt,
                       scenario.disturbance)
-    return replace(result, steer=steer_angle_series(result.v, result.omega + result.disturbance,
-                                                    RobotGeometry(), SteerMode()))
+    return with_steer_angles(result, RobotGeometry(), SteerMode())

@@ -6,7 +6,6 @@ import json
 import math
 import sys
 import time
-from dataclasses import replace
 
 from nfmr_dlsmc.cli_common import (RECORDED_STEP_BYTES, OneLineParser, check_memory,
                                    json_ready, non_negative_number, positive_number,
@@ -15,10 +14,9 @@ from nfmr_dlsmc.disturbances import disturbance_by_name
 from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
                                     load_gain_blocks)
 from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import HOLD_FROM, format_metric, simulation_metrics
+from nfmr_dlsmc.kinematic_sim import simulate, with_steer_angles
+from nfmr_dlsmc.metrics import HOLD_FROM, HOLD_ROWS, format_metric, simulation_metrics
 from nfmr_dlsmc.params import ControllerParams, ParamsFileError, controller_params, load_params_file
-from nfmr_dlsmc.steering import steer_angle_series
 from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
 from nfmr_dlsmc.validation import ParameterError
 
@@ -91,17 +89,6 @@ def _scenario(args) -> tuple[ControllerParams, object]:
     return params, params.trajectory
 
 
-#: The hold figures in the table: (label, unit, key).
-HOLD_ROWS = (("distance p99", " [m]", "hold_distance_p99"),
-             ("distance max", " [m]", "hold_distance_max"),
-             ("|theta_e| p99", " [rad]", "hold_theta_e_p99"),
-             ("|theta_e| max", " [rad]", "hold_theta_e_max"),
-             ("omega total variation", " [rad/s^2]", "hold_omega_tv"),
-             ("omega saturated", " [-]", "hold_omega_saturated"),
-             ("steer command rate max", " [rad/s]", "hold_steer_rate_max"),
-             ("steer joint rate max", " [rad/s]", "hold_steer_joint_rate_max"))
-
-
 def format_table(result: dict, paper: dict | None) -> str:
     """A readable metrics table; with ``paper``, the published values beside ours."""
     rows = [("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise"),
@@ -112,13 +99,13 @@ def format_table(result: dict, paper: dict | None) -> str:
             ("IAE of theta - theta_r [rad*s]", "theta_r_iae"),
             ("omega total variation after t_conv [rad/s^2]", "omega_tv_after_conv"),
             ("convergence time (1 cm) [s]", "t_conv_1cm")]
-    hold_from = result["hold_from"]
-    rows += [(f"{label} after {hold_from:g} s{unit}", key) for label, unit, key in HOLD_ROWS]
+    rows += list(HOLD_ROWS)
     scenario = result["scenario"]
     lines = [f"{scenario['controller']} on the {scenario['plant']} plant, "
              f"'{scenario['trajectory']}' from x0 = "
              f"({', '.join(f'{v:g}' for v in scenario['x0'])}), {scenario['duration']:g} s, "
-             f"dt = {scenario['dt']:g} s, disturbance: {scenario['disturbance']}"]
+             f"dt = {scenario['dt']:g} s, disturbance: {scenario['disturbance']}; "
+             f"hold: after {result['hold_from']:g} s"]
     header = f"{'metric':<46} {'nfmr':>12}"
     if paper:
         header += f" {'paper':>10} {'diff':>8}"
@@ -181,8 +168,7 @@ def _run(argv) -> int:
     else:
         sim = simulate(controller, trajectory, args.x0, args.duration, params.dlsmc.dt,
                        disturbance_by_name(args.disturbance))
-        sim = replace(sim, steer=steer_angle_series(sim.v, sim.omega + sim.disturbance,
-                                                    params.geometry, params.steering))
+        sim = with_steer_angles(sim, params.geometry, params.steering)
     cpu_s = time.process_time() - start
     result = simulation_metrics(sim, args.hold_from).as_dict()
     result["scenario"] = {

@@ -1,11 +1,12 @@
 """Closed-loop simulation of the unicycle kinematics (3) under a controller."""
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from nfmr_dlsmc.disturbances import YawRateDisturbance
+from nfmr_dlsmc.steering import RobotGeometry, SteerMode, steer_angle_series
 from nfmr_dlsmc.trajectories import reference_heading
 from nfmr_dlsmc.validation import ParameterError, check_finite, check_positive
 
@@ -62,6 +63,23 @@ class SimResult:
         return reference_heading(self.reference[:, 2], self.reference[:, 3])
 
 
+def sample_reference(trajectory, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The reference at times ``t`` [s]: (x_d, y_d, xdot_d, ydot_d) as an (N, 4) array
+    [m, m, m/s, m/s] and (xddot_d, yddot_d) as an (N, 2) array [m/s^2]."""
+    def columns(values):
+        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
+                                for c in values])
+    return columns(trajectory.sample(t)), columns(trajectory.acceleration(t))
+
+
+def with_steer_angles(result: "SimResult", geometry: RobotGeometry,
+                      mode: SteerMode) -> "SimResult":
+    """``result`` of the kinematic model with the steer angles the wheel mapping would
+    command for its inputs (omega with the yaw-rate disturbance, as the chassis gets it)."""
+    return replace(result, steer=steer_angle_series(result.v, result.omega + result.disturbance,
+                                                    geometry, mode))
+
+
 def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]:
     """Validate a run's start: (x0 as 3 finite floats, number of steps).
 
@@ -115,10 +133,7 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     x, y, theta = x0
 
     t = np.arange(n) * dt
-    ref = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
-                           for c in trajectory.sample(t)])
-    acc = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
-                           for c in trajectory.acceleration(t)])
+    ref, acc = sample_reference(trajectory, t)
     dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
 
     controller.reset()

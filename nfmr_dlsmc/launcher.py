@@ -15,7 +15,7 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import rclpy
@@ -25,13 +25,12 @@ from rclpy.signals import SignalHandlerOptions
 
 from nfmr_dlsmc.bag_writer import BagWriter
 from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.kinematic_sim import simulate
+from nfmr_dlsmc.kinematic_sim import simulate, with_steer_angles
 from nfmr_dlsmc.metrics import HOLD_FROM, simulation_metrics
 from nfmr_dlsmc.params import (ParamsFileError, controller_params, load_params_file,
                                shipped_config)
 from nfmr_dlsmc.pybullet_plant import simulate_pybullet
 from nfmr_dlsmc.recorder_node import RecorderNode
-from nfmr_dlsmc.steering import steer_angle_series
 from nfmr_dlsmc.bag_reader import read_bag
 from nfmr_dlsmc.run_analysis import (JOINT_TOPIC, STEER_FIELDS, metrics_table, plot_runs,
                                      state_metrics, state_series, steer_joint_rates)
@@ -311,8 +310,7 @@ def kinematic_run(params, x0, duration: float):
     """The run on the kinematic model, with the steer angles the mapping would command."""
     run = simulate(DlsmcController(params.dlsmc), params.trajectory, x0, duration,
                    params.dlsmc.dt)
-    return replace(run, steer=steer_angle_series(run.v, run.omega, params.geometry,
-                                                 params.steering))
+    return with_steer_angles(run, params.geometry, params.steering)
 
 
 def report(bag_dir, run_dir, params, settings, args, counts) -> None:

@@ -18,6 +18,15 @@ CONVERGENCE_TOLERANCE = 1e-3
 COARSE_TOLERANCE = 1e-2
 #: Default start of the hold window [s]: the hold figures cover t >= this.
 HOLD_FROM = 15.0
+#: The hold figures in metrics tables: (label, TrackingMetrics field).
+HOLD_ROWS = (("hold: distance p99 [m]", "hold_distance_p99"),
+             ("hold: distance max [m]", "hold_distance_max"),
+             ("hold: |theta_e| p99 [rad]", "hold_theta_e_p99"),
+             ("hold: |theta_e| max [rad]", "hold_theta_e_max"),
+             ("hold: omega total variation [rad/s^2]", "hold_omega_tv"),
+             ("hold: omega saturated [-]", "hold_omega_saturated"),
+             ("hold: steer command rate max [rad/s]", "hold_steer_rate_max"),
+             ("hold: steer joint rate max [rad/s]", "hold_steer_joint_rate_max"))
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 
 from nfmr_dlsmc.disturbances import YawRateDisturbance
-from nfmr_dlsmc.kinematic_sim import SimResult, check_start
+from nfmr_dlsmc.kinematic_sim import SimResult, check_start, sample_reference
 from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.validation import ParameterError
 from nfmr_sim.world import ChassisWorld
@@ -78,10 +78,7 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
                              f"wheel radius {chassis.wheel_radius:g} m)")
 
     t = np.arange(n) * dt
-    ref = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
-                           for c in trajectory.sample(t)])
-    acc = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
-                           for c in trajectory.acceleration(t)])
+    ref, acc = sample_reference(trajectory, t)
     dist = disturbance.sample(t) if disturbance is not None else np.zeros(n)
 
     controller.reset()

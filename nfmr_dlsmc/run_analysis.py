@@ -14,7 +14,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 
 from nfmr_dlsmc.bag_reader import BagContents, BagError  # noqa: E402
-from nfmr_dlsmc.metrics import (HOLD_FROM, TrackingMetrics, format_metric,  # noqa: E402
+from nfmr_dlsmc.metrics import (HOLD_FROM, HOLD_ROWS, TrackingMetrics, format_metric,  # noqa: E402
                                 sample_durations, tracking_metrics)
 from nfmr_dlsmc.tracking_session import STATE_FIELDS  # noqa: E402
 
@@ -180,15 +180,7 @@ TABLE_ROWS = (("IAE of distance [m*s]", "iae"), ("ISE of distance [m^2*s]", "ise
               ("max |theta_e| after t_conv [rad]", "max_abs_theta_e_after_conv"),
               ("IAE of theta_e [rad*s]", "theta_e_iae"), ("max v [m/s]", "max_v"),
               ("max |omega| [rad/s]", "max_abs_omega"),
-              ("convergence time (1 cm) [s]", "t_conv_1cm"),
-              ("hold: distance p99 [m]", "hold_distance_p99"),
-              ("hold: distance max [m]", "hold_distance_max"),
-              ("hold: |theta_e| p99 [rad]", "hold_theta_e_p99"),
-              ("hold: |theta_e| max [rad]", "hold_theta_e_max"),
-              ("hold: omega total variation [rad/s^2]", "hold_omega_tv"),
-              ("hold: omega saturated [-]", "hold_omega_saturated"),
-              ("hold: steer command rate max [rad/s]", "hold_steer_rate_max"),
-              ("hold: steer joint rate max [rad/s]", "hold_steer_joint_rate_max"))
+              ("convergence time (1 cm) [s]", "t_conv_1cm")) + HOLD_ROWS
 
 
 def metrics_table(columns: list) -> str:
