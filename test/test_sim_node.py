@@ -68,6 +68,15 @@ class Driver(Node):
             self.send(steer, wheels)
             self.wait_odom(n + 1)
 
+    def drive_twists(self, twists):
+        """Lockstep on ``cmd_vel``: each (vx [m/s], wz [rad/s]) answers one odometry message."""
+        for vx, wz in twists:
+            n = len(self.odom)
+            msg = Twist()
+            msg.linear.x, msg.angular.z = vx, wz
+            self.twist.publish(msg)
+            self.wait_odom(n + 1)
+
 
 @pytest.fixture
 def ros_context():
@@ -135,11 +144,7 @@ def test_cmd_vel_goes_through_the_steering_geometry(ros_context):
     sim, driver, executor = start(ros_context, lockstep_timeout=1.0)
     try:
         driver.wait_odom(1)
-        for _ in range(3000):
-            n = len(driver.odom)
-            driver.twist.publish(Twist(linear=type(Twist().linear)(x=0.8),
-                                       angular=type(Twist().angular)(z=0.4)))
-            driver.wait_odom(n + 1)
+        driver.drive_twists([(0.8, 0.4)] * 3000)
         twist = driver.odom[-1].twist.twist
         assert twist.linear.x == pytest.approx(0.8, rel=0.05)
         assert twist.angular.z == pytest.approx(0.4, rel=0.05)
@@ -174,25 +179,13 @@ def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reas
         stop(sim, driver, executor)
 
 
-def _twist(vx, wz):
-    msg = Twist()
-    msg.linear.x, msg.angular.z = vx, wz
-    return msg
-
-
 def test_a_huge_cmd_vel_brakes_is_logged_once_and_the_sim_keeps_stepping(ros_context):
     sim, driver, executor = start(ros_context, lockstep_timeout=0.005)
     try:
         driver.wait_odom(1)
-        for _ in range(500):
-            n = len(driver.odom)
-            driver.twist.publish(_twist(0.5, 0.0))
-            driver.wait_odom(n + 1)
+        driver.drive_twists([(0.5, 0.0)] * 500)
         assert driver.odom[-1].twist.twist.linear.x > 0.4
-        for k in range(500):  # huge, and different every time
-            n = len(driver.odom)
-            driver.twist.publish(_twist(1e308 / (k + 1), 1e308))
-            driver.wait_odom(n + 1)
+        driver.drive_twists([(1e308 / (k + 1), 1e308) for k in range(500)])  # huge, each different
         assert abs(driver.odom[-1].twist.twist.linear.x) < 0.01
         steps = sim.steps
         driver.wait_odom(len(driver.odom) + 100)  # stepping on by lockstep timeouts
