@@ -46,7 +46,7 @@ report: setup
 # Mutation testing of the core laws and guards with the fast tests (doc/mutation.md; the
 # [mutmut] section of setup.cfg says which modules and tests). Incremental: mutants/ keeps
 # the verdicts and only changed functions are tested again; `rm -rf mutants` starts over.
-# MUTANTS narrows the run, e.g. make mutate MUTANTS='nfmr_dlsmc.steering.*'.
+# MUTANTS narrows the run, e.g. make mutate MUTANTS='nfmr_dlsmc.core.steering.*'.
 MUTATE_JOBS ?= 2
 MUTANTS     ?=
 MUTMUT      := $(BIN)/mutmut

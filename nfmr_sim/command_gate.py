@@ -1,4 +1,5 @@
-"""Which wheel command the simulated robot obeys: validation, timeouts, lockstep pairing.
+"""
+Which wheel command the simulated robot obeys: validation, timeouts, lockstep pairing.
 
 ROS-free: the sim node hands every incoming command to a :class:`CommandGate` and asks it,
 once per physics step, what to apply. Faults (a malformed command, or no valid command for
@@ -15,23 +16,23 @@ inf) is refused like a NaN. :func:`check_steer`, :func:`check_wheel_speed` and
 :class:`Rejection`, never raises.
 """
 
+from dataclasses import dataclass
 import math
 import threading
-from dataclasses import dataclass
 
+from nfmr_dlsmc.core.steering import RobotGeometry, wheel_commands_for_twist, WHEEL_NAMES
+from nfmr_dlsmc.core.validation import check_positive
 import numpy as np
 
-from nfmr_dlsmc.steering import WHEEL_NAMES, RobotGeometry, wheel_commands_for_twist
-from nfmr_dlsmc.validation import check_positive
-
-STEER_TOPIC = "steer_position_controller/commands"
-WHEEL_TOPIC = "wheel_velocity_controller/commands"
-TWIST_TOPIC = "cmd_vel"
+STEER_TOPIC = 'steer_position_controller/commands'
+WHEEL_TOPIC = 'wheel_velocity_controller/commands'
+TWIST_TOPIC = 'cmd_vel'
 
 
 @dataclass(frozen=True)
 class Rejection:
-    """Why a command was refused.
+    """
+    Why a command was refused.
 
     Attributes
     ----------
@@ -46,6 +47,7 @@ class Rejection:
     unit : str
     rule : str
         The rule broken, e.g. ``must be within +-50 rad/s (motors.max_wheel_speed)``.
+
     """
 
     topic: str
@@ -60,8 +62,8 @@ class Rejection:
         return self.topic, self.rule
 
     def __str__(self) -> str:
-        shown = f"{self.value!r} {self.unit}".rstrip()
-        return f"rejected {self.topic}: {self.field} = {shown}: {self.rule}"
+        shown = f'{self.value!r} {self.unit}'.rstrip()
+        return f'rejected {self.topic}: {self.field} = {shown}: {self.rule}'
 
 
 def _first_out_of_bounds(values: np.ndarray, bound: float) -> int | None:
@@ -74,33 +76,34 @@ def _check_array(values, topic: str, unit: str, bound: float,
                  bound_name: str) -> np.ndarray | Rejection:
     array = np.array(values, dtype=float)  # a copy: the caller may reuse its buffer
     if array.shape != (4,):
-        return Rejection(topic, "len(data)", array.size, "", "must be 4 (FL, FR, RL, RR)")
+        return Rejection(topic, 'len(data)', array.size, '', 'must be 4 (FL, FR, RL, RR)')
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
         i = int(bad[0])
-        return Rejection(topic, f"data[{i}] ({WHEEL_NAMES[i]})", float(array[i]), unit,
-                         "must be finite, not NaN or inf")
+        return Rejection(topic, f'data[{i}] ({WHEEL_NAMES[i]})', float(array[i]), unit,
+                         'must be finite, not NaN or inf')
     i = _first_out_of_bounds(array, bound)
     if i is not None:
-        return Rejection(topic, f"data[{i}] ({WHEEL_NAMES[i]})", float(array[i]), unit,
-                         f"must be within +-{bound:g} {unit} ({bound_name})")
+        return Rejection(topic, f'data[{i}] ({WHEEL_NAMES[i]})', float(array[i]), unit,
+                         f'must be within +-{bound:g} {unit} ({bound_name})')
     return array
 
 
 def check_steer(values, steer_limit: float) -> np.ndarray | Rejection:
     """Four steer angles [rad], FL FR RL RR, each finite and within +-``steer_limit`` [rad]."""
-    return _check_array(values, STEER_TOPIC, "rad", steer_limit, "chassis.steer_limit")
+    return _check_array(values, STEER_TOPIC, 'rad', steer_limit, 'chassis.steer_limit')
 
 
 def check_wheel_speed(values, max_wheel_speed: float) -> np.ndarray | Rejection:
     """Four drive speeds [rad/s], each finite and within +-``max_wheel_speed`` [rad/s]."""
-    return _check_array(values, WHEEL_TOPIC, "rad/s", max_wheel_speed,
-                        "motors.max_wheel_speed")
+    return _check_array(values, WHEEL_TOPIC, 'rad/s', max_wheel_speed,
+                        'motors.max_wheel_speed')
 
 
 def map_twist(vx: float, vy: float, wz: float, geometry: RobotGeometry, offset: float,
               max_wheel_speed: float, hold_steer=None):
-    """The wheel commands of the body twist of P, or why there are none.
+    """
+    The wheel commands of the body twist of P, or why there are none.
 
     Parameters
     ----------
@@ -121,29 +124,31 @@ def map_twist(vx: float, vy: float, wz: float, geometry: RobotGeometry, offset: 
     -------
     (steer, wheel_speed) : tuple of ndarray (4,)
         [rad], [rad/s], within the limits; or a :class:`Rejection`.
+
     """
-    fields = (("linear.x", vx, "m/s"), ("linear.y", vy, "m/s"), ("angular.z", wz, "rad/s"))
+    fields = (('linear.x', vx, 'm/s'), ('linear.y', vy, 'm/s'), ('angular.z', wz, 'rad/s'))
     for name, value, unit in fields:
         if not math.isfinite(value):
-            return Rejection(TWIST_TOPIC, name, value, unit, "must be finite, not NaN or inf")
+            return Rejection(TWIST_TOPIC, name, value, unit, 'must be finite, not NaN or inf')
     # The centre moves at v_P + omega x (centre - P) = (vx, vy - wz * offset). A finite but
     # huge twist overflows to inf here; the bound check below refuses it.
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over='ignore', invalid='ignore'):
         cmd = wheel_commands_for_twist(vx, vy - wz * offset, wz, geometry,
                                        hold_steer=hold_steer)
-    twist = f"(linear.x, linear.y, angular.z) = ({vx:g}, {vy:g}, {wz:g}) maps to"
+    twist = f'(linear.x, linear.y, angular.z) = ({vx:g}, {vy:g}, {wz:g}) maps to'
     for output, what, unit, bound, bound_name in (
-            (cmd.wheel_speed, "wheel speed", "rad/s", max_wheel_speed, "motors.max_wheel_speed"),
-            (cmd.steer, "steer angle", "rad", geometry.steer_limit, "chassis.steer_limit")):
+            (cmd.wheel_speed, 'wheel speed', 'rad/s', max_wheel_speed, 'motors.max_wheel_speed'),
+            (cmd.steer, 'steer angle', 'rad', geometry.steer_limit, 'chassis.steer_limit')):
         i = _first_out_of_bounds(output, bound)
         if i is not None:
-            return Rejection(TWIST_TOPIC, f"{twist} {WHEEL_NAMES[i]} {what}", float(output[i]),
-                             unit, f"must be within +-{bound:g} {unit} ({bound_name})")
+            return Rejection(TWIST_TOPIC, f'{twist} {WHEEL_NAMES[i]} {what}', float(output[i]),
+                             unit, f'must be within +-{bound:g} {unit} ({bound_name})')
     return cmd.steer, cmd.wheel_speed
 
 
 class CommandGate:
-    """Thread-safe holder of the latest valid per-wheel command.
+    """
+    Thread-safe holder of the latest valid per-wheel command.
 
     Parameters
     ----------
@@ -156,6 +161,7 @@ class CommandGate:
         Body-frame x of the point P [m] that ``cmd_vel`` refers to.
     max_wheel_speed : float
         Largest |drive speed| [rad/s] a command may ask for.
+
     """
 
     def __init__(self, timeout: float, geometry: RobotGeometry, tracked_point_offset: float,
@@ -168,14 +174,14 @@ class CommandGate:
         self._wheels = None
         self._new_steer = self._new_wheels = self._new_twist = self._new_reject = False
         self._last_valid = None  # sim time [s] of the last valid command
-        self._fault = "no command received yet"
+        self._fault = 'no command received yet'
         self._fault_kind = None  # Rejection.kind while the fault is a rejection
         self._reported = None
 
     def configure(self, timeout: float, max_wheel_speed: float) -> None:
         """Set the command timeout [s] and the wheel speed bound [rad/s] (live changes)."""
-        check_positive("command_timeout", timeout, "s")
-        check_positive("motors.max_wheel_speed", max_wheel_speed, "rad/s")
+        check_positive('command_timeout', timeout, 's')
+        check_positive('motors.max_wheel_speed', max_wheel_speed, 'rad/s')
         with self._cond:
             self.timeout = timeout
             self.max_wheel_speed = max_wheel_speed
@@ -232,34 +238,38 @@ class CommandGate:
     # -- outputs (called from the stepping thread) ------------------------------------------
 
     def wait_for_step_command(self, timeout: float) -> bool:
-        """Lockstep: wait up to ``timeout`` wall seconds for this step's command: both
-        per-wheel arrays, one twist, or a rejected message. True if one arrived."""
+        """
+        Lockstep: wait up to ``timeout`` wall seconds for this step's command: both
+        per-wheel arrays, one twist, or a rejected message. True if one arrived.
+        """
         with self._cond:
             return self._cond.wait_for(
                 lambda: (self._new_steer and self._new_wheels) or self._new_twist
                 or self._new_reject, timeout)
 
     def take(self, now: float):
-        """The command to apply at sim time ``now``, or None to brake.
+        """
+        The command to apply at sim time ``now``, or None to brake.
 
         Returns
         -------
         command : tuple (steer, wheel_speed) of ndarrays, or None
         report : str or None
             A message when the fault state changed (to log once), else None.
+
         """
         with self._cond:
             self._new_steer = self._new_wheels = self._new_twist = self._new_reject = False
             if self._fault is None and now - self._last_valid > self.timeout:
-                self._fault = (f"no valid command for {now - self._last_valid:.3f} s "
-                               f"(timeout {self.timeout:g} s)")
+                self._fault = (f'no valid command for {now - self._last_valid:.3f} s '
+                               f'(timeout {self.timeout:g} s)')
                 self._steer = self._wheels = None
             report = None
             if self._fault != self._reported:
                 if self._fault is None:
-                    report = "valid commands resumed: driving again"
+                    report = 'valid commands resumed: driving again'
                 else:
-                    report = f"braking: {self._fault}"
+                    report = f'braking: {self._fault}'
                 self._reported = self._fault
             if self._fault is not None:
                 return None, report

@@ -4,10 +4,9 @@ import argparse
 import math
 
 import matplotlib.pyplot as plt
-import numpy as np
-
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_sim.world import ChassisWorld
+import numpy as np
 
 
 def render_chassis(world: ChassisWorld, width: int = 800, height: int = 600,
@@ -26,8 +25,8 @@ def render_chassis(world: ChassisWorld, width: int = 800, height: int = 600,
 
 def main(argv=None) -> int:
     """Write a PNG of the chassis in a double-Ackermann turn: ``python -m nfmr_sim.render``."""
-    parser = argparse.ArgumentParser(prog="python -m nfmr_sim.render")
-    parser.add_argument("out", nargs="?", default="chassis.png")
+    parser = argparse.ArgumentParser(prog='python -m nfmr_sim.render')
+    parser.add_argument('out', nargs='?', default='chassis.png')
     args = parser.parse_args(argv)
     with ChassisWorld() as world:
         cmd = wheel_commands(0.3, 0.8, RobotGeometry(), SteerMode(1.0, 0.0))
@@ -40,5 +39,5 @@ def main(argv=None) -> int:
     return 0
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())

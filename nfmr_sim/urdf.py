@@ -1,4 +1,5 @@
-"""URDF of the 4WIS chassis generated from its dimensions (paper Table 1 by default).
+"""
+URDF of the 4WIS chassis generated from its dimensions (paper Table 1 by default).
 
 Links: ``base_link`` (the chassis box, origin at the geometric centre at axle height),
 and per wheel ``<wheel>_steer_link`` (revolute about z, limited) carrying
@@ -6,16 +7,17 @@ and per wheel ``<wheel>_steer_link`` (revolute about z, limited) carrying
 ``front_left_steer``, ``front_left_drive``, ... in the order FL, FR, RL, RR.
 """
 
-import math
 from dataclasses import dataclass
+import math
 
-from nfmr_dlsmc.steering import WHEEL_NAMES
-from nfmr_dlsmc.validation import ParameterError, check_positive
+from nfmr_dlsmc.core.steering import WHEEL_NAMES
+from nfmr_dlsmc.core.validation import check_positive, ParameterError
 
 
 @dataclass(frozen=True)
 class ChassisConfig:
-    """Dimensions and masses of the chassis.
+    """
+    Dimensions and masses of the chassis.
 
     Attributes
     ----------
@@ -35,6 +37,7 @@ class ChassisConfig:
         Izz of the chassis box [kg m^2]; None: that of a uniform box.
     steer_limit : float
         Steer joint range +-limit [rad].
+
     """
 
     wheelbase: float = 0.89
@@ -49,17 +52,17 @@ class ChassisConfig:
     steer_limit: float = math.pi / 2
 
     def __post_init__(self):
-        for name in ("wheelbase", "track", "wheel_radius", "wheel_width", "total_mass",
-                     "wheel_mass", "steer_mass", "body_height", "steer_limit"):
-            check_positive(f"chassis.{name}", getattr(self, name))
+        for name in ('wheelbase', 'track', 'wheel_radius', 'wheel_width', 'total_mass',
+                     'wheel_mass', 'steer_mass', 'body_height', 'steer_limit'):
+            check_positive(f'chassis.{name}', getattr(self, name))
         if self.body_mass <= 0.0:
-            raise ParameterError("chassis.total_mass", self.total_mass,
-                                 "must exceed the four wheels and steering knuckles", "kg")
+            raise ParameterError('chassis.total_mass', self.total_mass,
+                                 'must exceed the four wheels and steering knuckles', 'kg')
         if self.yaw_inertia is not None:
-            check_positive("chassis.yaw_inertia", self.yaw_inertia, "kg m^2")
+            check_positive('chassis.yaw_inertia', self.yaw_inertia, 'kg m^2')
         if self.steer_limit > math.pi / 2:
-            raise ParameterError("chassis.steer_limit", self.steer_limit, "must be <= pi/2",
-                                 "rad")
+            raise ParameterError('chassis.steer_limit', self.steer_limit, 'must be <= pi/2',
+                                 'rad')
 
     @property
     def body_mass(self) -> float:
@@ -72,7 +75,7 @@ def _inertia_box(mass, x, y, z):
             mass * (x * x + y * y) / 12.0)
 
 
-def _inertial(mass, ixx, iyy, izz, xyz="0 0 0"):
+def _inertial(mass, ixx, iyy, izz, xyz='0 0 0'):
     return (f'<inertial><origin xyz="{xyz}" rpy="0 0 0"/><mass value="{mass!r}"/>'
             f'<inertia ixx="{ixx!r}" ixy="0" ixz="0" iyy="{iyy!r}" iyz="0" izz="{izz!r}"/>'
             f'</inertial>')
@@ -120,4 +123,4 @@ def chassis_urdf(cfg: ChassisConfig) -> str:
             f'<child link="{name}_wheel_link"/><origin xyz="0 0 0" rpy="0 0 0"/>'
             f'<axis xyz="0 1 0"/><limit effort="1e6" velocity="1000"/></joint>']
     parts.append('</robot>')
-    return "\n".join(parts)
+    return '\n'.join(parts)

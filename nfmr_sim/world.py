@@ -1,26 +1,26 @@
 """The pybullet world of the 4WIS chassis (no ROS): build, command, step, observe."""
 
 import collections
-import math
-import tempfile
 from dataclasses import dataclass
+import math
 from pathlib import Path
+import tempfile
 
+from nfmr_dlsmc.core.steering import WHEEL_NAMES
+from nfmr_sim.urdf import chassis_urdf
+from nfmr_sim.world_config import WorldConfig
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from nfmr_dlsmc.steering import WHEEL_NAMES
-from nfmr_sim.urdf import chassis_urdf
-from nfmr_sim.world_config import WorldConfig
-
-STEER_JOINTS = tuple(f"{w}_steer" for w in WHEEL_NAMES)
-DRIVE_JOINTS = tuple(f"{w}_drive" for w in WHEEL_NAMES)
+STEER_JOINTS = tuple(f'{w}_steer' for w in WHEEL_NAMES)
+DRIVE_JOINTS = tuple(f'{w}_drive' for w in WHEEL_NAMES)
 
 
 @dataclass(frozen=True)
 class PlanarState:
-    """Planar pose and twist of a body point.
+    """
+    Planar pose and twist of a body point.
 
     Attributes
     ----------
@@ -30,6 +30,7 @@ class PlanarState:
         Velocity in the body frame (forward, left) [m/s].
     yaw_rate : float
         [rad/s]
+
     """
 
     x: float
@@ -42,7 +43,8 @@ class PlanarState:
 
 @dataclass(frozen=True)
 class StepOutput:
-    """What one physics step produced.
+    """
+    What one physics step produced.
 
     Attributes
     ----------
@@ -60,6 +62,7 @@ class StepOutput:
         Indices of the force pulses acting during the step.
     drive_torque_saturated : bool
         Whether any drive joint applied its torque limit.
+
     """
 
     time: float
@@ -75,13 +78,15 @@ class StepOutput:
 
 
 class ChassisWorld:
-    """One pybullet client holding the ground, friction patches and the chassis.
+    """
+    One pybullet client holding the ground, friction patches and the chassis.
 
     Parameters
     ----------
     config : WorldConfig
     gui : bool
         Open pybullet's GUI instead of the DIRECT (headless) client.
+
     """
 
     def __init__(self, config: WorldConfig | None = None, gui: bool = False):
@@ -103,7 +108,7 @@ class ChassisWorld:
                 0.5 * (patch.x_min + patch.x_max), 0.5 * (patch.y_min + patch.y_max), 0.0005])
             c.changeDynamics(body, -1, lateralFriction=patch.lateral / friction.lateral)
         with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / "nfmr_4wis.urdf"
+            path = Path(tmp) / 'nfmr_4wis.urdf'
             path.write_text(chassis_urdf(config.chassis))
             self._robot = c.loadURDF(str(path), basePosition=[0, 0, config.chassis.wheel_radius],
                                      flags=pybullet.URDF_USE_INERTIA_FROM_FILE
@@ -170,26 +175,28 @@ class ChassisWorld:
 
     @property
     def robot(self) -> int:
-        """pybullet body id of the chassis."""
+        """Pybullet body id of the chassis."""
         return self._robot
 
     # -- commands --------------------------------------------------------------------------
 
     def set_wheel_commands(self, steer, wheel_speed) -> None:
-        """Steer positions [rad] and drive speeds [rad/s], FL FR RL RR; held until changed.
+        """
+        Steer positions [rad] and drive speeds [rad/s], FL FR RL RR; held until changed.
 
         Raises
         ------
         ValueError
             Wrong length or a non-finite value; the previous command stays in force.
+
         """
         steer = np.asarray(steer, dtype=float)
         wheel_speed = np.asarray(wheel_speed, dtype=float)
         if steer.shape != (4,) or wheel_speed.shape != (4,):
-            raise ValueError(f"expected 4 steer angles and 4 wheel speeds, got "
-                             f"{steer.size} and {wheel_speed.size}")
+            raise ValueError(f'expected 4 steer angles and 4 wheel speeds, got '
+                             f'{steer.size} and {wheel_speed.size}')
         if not (np.all(np.isfinite(steer)) and np.all(np.isfinite(wheel_speed))):
-            raise ValueError("steer angles and wheel speeds must be finite")
+            raise ValueError('steer angles and wheel speeds must be finite')
         limit = self.config.chassis.steer_limit
         self._steer_target = np.clip(steer, -limit, limit)
         self._wheel_target = wheel_speed

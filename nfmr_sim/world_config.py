@@ -2,15 +2,20 @@
 
 from dataclasses import dataclass, field
 
-from nfmr_dlsmc.steering import SteerMode
-from nfmr_dlsmc.validation import (ParameterError, check_finite, check_non_negative,
-                                   check_positive)
+from nfmr_dlsmc.core.steering import SteerMode
+from nfmr_dlsmc.core.validation import (
+    check_finite,
+    check_non_negative,
+    check_positive,
+    ParameterError,
+)
 from nfmr_sim.urdf import ChassisConfig
 
 
 @dataclass(frozen=True)
 class MotorConfig:
-    """Steer and drive motors (paper Table 1: rated torque 20 Nm per motor).
+    """
+    Steer and drive motors (paper Table 1: rated torque 20 Nm per motor).
 
     Attributes
     ----------
@@ -24,6 +29,7 @@ class MotorConfig:
         pybullet POSITION_CONTROL gains (dimensionless, per step).
     steer_lag : float
         Time constant [s] of a first-order lag on the steer command (0: none).
+
     """
 
     rated_torque: float = 20.0
@@ -35,10 +41,10 @@ class MotorConfig:
     steer_lag: float = 0.0
 
     def __post_init__(self):
-        for name in ("rated_torque", "drive_gear_ratio", "steer_gear_ratio",
-                     "steer_rate_limit", "steer_position_gain", "steer_velocity_gain"):
-            check_positive(f"motors.{name}", getattr(self, name))
-        check_non_negative("motors.steer_lag", self.steer_lag, "s")
+        for name in ('rated_torque', 'drive_gear_ratio', 'steer_gear_ratio',
+                     'steer_rate_limit', 'steer_position_gain', 'steer_velocity_gain'):
+            check_positive(f'motors.{name}', getattr(self, name))
+        check_non_negative('motors.steer_lag', self.steer_lag, 's')
 
     @property
     def drive_torque_limit(self) -> float:
@@ -53,7 +59,8 @@ class MotorConfig:
 
 @dataclass(frozen=True)
 class FrictionPatch:
-    """A rectangle of the ground [m] with its own lateral friction coefficient.
+    """
+    A rectangle of the ground [m] with its own lateral friction coefficient.
 
     Modelled as a 1 mm thick box lying on the ground plane.
     """
@@ -65,18 +72,19 @@ class FrictionPatch:
     lateral: float = 0.2
 
     def __post_init__(self):
-        for name in ("x_min", "x_max", "y_min", "y_max"):
-            check_finite(f"friction.patch.{name}", getattr(self, name), "m")
+        for name in ('x_min', 'x_max', 'y_min', 'y_max'):
+            check_finite(f'friction.patch.{name}', getattr(self, name), 'm')
         if self.x_max <= self.x_min:
-            raise ParameterError("friction.patch.x_max", self.x_max, f"must be > x_min = {self.x_min}", "m")
+            raise ParameterError('friction.patch.x_max', self.x_max, f'must be > x_min = {self.x_min}', 'm')
         if self.y_max <= self.y_min:
-            raise ParameterError("friction.patch.y_max", self.y_max, f"must be > y_min = {self.y_min}", "m")
-        check_positive("friction.patch.lateral", self.lateral)
+            raise ParameterError('friction.patch.y_max', self.y_max, f'must be > y_min = {self.y_min}', 'm')
+        check_positive('friction.patch.lateral', self.lateral)
 
 
 @dataclass(frozen=True)
 class FrictionConfig:
-    """Wheel-ground friction coefficients (Bullet multiplies wheel and ground values).
+    """
+    Wheel-ground friction coefficients (Bullet multiplies wheel and ground values).
 
     Attributes
     ----------
@@ -88,6 +96,7 @@ class FrictionConfig:
         Spinning (torsional) friction [m], resisting steering on the spot.
     patches : tuple of FrictionPatch
         Regions of different friction.
+
     """
 
     lateral: float = 1.0
@@ -96,14 +105,15 @@ class FrictionConfig:
     patches: tuple[FrictionPatch, ...] = ()
 
     def __post_init__(self):
-        check_positive("friction.lateral", self.lateral)
-        for name in ("rolling", "spinning"):
-            check_non_negative(f"friction.{name}", getattr(self, name), "m")
+        check_positive('friction.lateral', self.lateral)
+        for name in ('rolling', 'spinning'):
+            check_non_negative(f'friction.{name}', getattr(self, name), 'm')
 
 
 @dataclass(frozen=True)
 class ForcePulse:
-    """An external force [N] (world frame) and yaw torque [Nm] on the chassis for a while.
+    """
+    An external force [N] (world frame) and yaw torque [Nm] on the chassis for a while.
 
     Tyre contacts are rigid Coulomb contacts: a yaw torque moves the robot only once it
     exceeds what the tyres' grip resists (about 4.5 kNm for the default 1 t robot on
@@ -118,6 +128,7 @@ class ForcePulse:
         World-frame force at the chassis centre [N].
     yaw_torque : float
         Torque about the world z axis [Nm].
+
     """
 
     start: float
@@ -127,10 +138,10 @@ class ForcePulse:
     yaw_torque: float = 0.0
 
     def __post_init__(self):
-        check_finite("disturbance.pulse.start", self.start, "s")
-        check_positive("disturbance.pulse.duration", self.duration, "s")
-        for name, unit in (("force_x", "N"), ("force_y", "N"), ("yaw_torque", "Nm")):
-            check_finite(f"disturbance.pulse.{name}", getattr(self, name), unit)
+        check_finite('disturbance.pulse.start', self.start, 's')
+        check_positive('disturbance.pulse.duration', self.duration, 's')
+        for name, unit in (('force_x', 'N'), ('force_y', 'N'), ('yaw_torque', 'Nm')):
+            check_finite(f'disturbance.pulse.{name}', getattr(self, name), unit)
 
     def active(self, t: float) -> bool:
         """Whether the pulse acts at time t [s]."""
@@ -139,7 +150,8 @@ class ForcePulse:
 
 @dataclass(frozen=True)
 class DisturbanceConfig:
-    """The disturbance schedule, seeded so that a run is reproducible.
+    """
+    The disturbance schedule, seeded so that a run is reproducible.
 
     Attributes
     ----------
@@ -152,6 +164,7 @@ class DisturbanceConfig:
         Odometry is this many physics steps old.
     seed : int
         Seed of the noise generator.
+
     """
 
     pulses: tuple[ForcePulse, ...] = ()
@@ -163,19 +176,20 @@ class DisturbanceConfig:
     seed: int = 0
 
     def __post_init__(self):
-        check_finite("disturbance.constant_force_x", self.constant_force_x, "N")
-        check_finite("disturbance.constant_force_y", self.constant_force_y, "N")
-        for name, unit in (("odom_position_noise", "m"), ("odom_yaw_noise", "rad")):
-            check_non_negative(f"disturbance.{name}", getattr(self, name), unit)
-        for name in ("odom_latency_steps", "seed"):
+        check_finite('disturbance.constant_force_x', self.constant_force_x, 'N')
+        check_finite('disturbance.constant_force_y', self.constant_force_y, 'N')
+        for name, unit in (('odom_position_noise', 'm'), ('odom_yaw_noise', 'rad')):
+            check_non_negative(f'disturbance.{name}', getattr(self, name), unit)
+        for name in ('odom_latency_steps', 'seed'):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ParameterError(f"disturbance.{name}", value, "must be an integer >= 0")
+                raise ParameterError(f'disturbance.{name}', value, 'must be an integer >= 0')
 
 
 @dataclass(frozen=True)
 class WorldConfig:
-    """Everything the simulated world is built from.
+    """
+    Everything the simulated world is built from.
 
     Attributes
     ----------
@@ -185,6 +199,7 @@ class WorldConfig:
         Sets the tracked point P (doc/design.md, D2) whose pose the odometry reports.
     physics_dt : float
         Physics step [s].
+
     """
 
     chassis: ChassisConfig = field(default_factory=ChassisConfig)
@@ -195,9 +210,9 @@ class WorldConfig:
     physics_dt: float = 0.001
 
     def __post_init__(self):
-        dt = check_positive("physics_dt", self.physics_dt, "s")
+        dt = check_positive('physics_dt', self.physics_dt, 's')
         if dt > 0.01:
-            raise ParameterError("physics_dt", self.physics_dt, "must be <= 0.01 for stable contacts", "s")
+            raise ParameterError('physics_dt', self.physics_dt, 'must be <= 0.01 for stable contacts', 's')
 
     @property
     def tracked_point_offset(self) -> float:

@@ -23,11 +23,11 @@ class Spinner:
         self.thread.join(timeout=5.0)
 
 
-def wait_for(predicate, timeout=10.0, what="condition"):
+def wait_for(predicate, timeout=10.0, what='condition'):
     """Poll ``predicate`` until true; fail the test after ``timeout`` seconds."""
     deadline = time.monotonic() + timeout
     while not predicate():
-        assert time.monotonic() < deadline, f"{what} not met within {timeout} s"
+        assert time.monotonic() < deadline, f'{what} not met within {timeout} s'
         time.sleep(0.002)
 
 

@@ -1,33 +1,32 @@
 """nfmr-analyze on our bags, on an independent writer's bag, and on broken bags."""
 
 import json
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.trajectories import make_trajectory
-from nfmr_dlsmc.tracking_session import STATE_FIELDS
+from rosbags.typesys import get_typestore, Stores
 from synthetic_bags import state_rows, write_run_bag
 
-ANALYZE = str(Path(sys.executable).parent / "nfmr-analyze")
+ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def case1():
-    return simulate(DlsmcController(), make_trajectory("sine"), (1.0, 4.0, 0.0), 100.0)
+    return simulate(DlsmcController(), make_trajectory('sine'), (1.0, 4.0, 0.0), 100.0)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def case1_bag(case1, tmp_path_factory):
-    directory = tmp_path_factory.mktemp("bags") / "case1"
+    directory = tmp_path_factory.mktemp('bags') / 'case1'
     write_run_bag(directory, case1, with_odom=False)
     return directory
 
@@ -41,92 +40,92 @@ def last_json(proc):
 
 
 def test_metrics_of_a_bag_equal_those_of_the_run_it_records(case1, case1_bag):
-    proc = analyze(case1_bag, "--json")
+    proc = analyze(case1_bag, '--json')
     assert proc.returncode == 0, proc.stderr
-    got = last_json(proc)["bags"][0]["metrics"]
+    got = last_json(proc)['bags'][0]['metrics']
     want = simulation_metrics(case1).as_dict()
-    for key in ("iae", "ise", "std", "t_conv", "final_distance", "max_v", "max_abs_omega",
-                "theta_e_iae", "max_abs_theta_e_after_conv"):
+    for key in ('iae', 'ise', 'std', 't_conv', 'final_distance', 'max_v', 'max_abs_omega',
+                'theta_e_iae', 'max_abs_theta_e_after_conv'):
         assert got[key] == pytest.approx(want[key], rel=1e-9, abs=1e-12), key
-    assert got["iae"] == pytest.approx(13.5757, rel=0.025)  # the paper's Table 2 value
+    assert got['iae'] == pytest.approx(13.5757, rel=0.025)  # the paper's Table 2 value
 
 
 def test_a_bag_from_an_independent_writer(case1, tmp_path):
     store = get_typestore(Stores.ROS2_JAZZY)
-    Array = store.types["std_msgs/msg/Float64MultiArray"]
-    Layout = store.types["std_msgs/msg/MultiArrayLayout"]
-    Dim = store.types["std_msgs/msg/MultiArrayDimension"]
+    Array = store.types['std_msgs/msg/Float64MultiArray']
+    Layout = store.types['std_msgs/msg/MultiArrayLayout']
+    Dim = store.types['std_msgs/msg/MultiArrayDimension']
     rows = state_rows(case1)[::10]
-    path = tmp_path / "rosbags_bag"
+    path = tmp_path / 'rosbags_bag'
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        conn = writer.add_connection("/controller_state", "std_msgs/msg/Float64MultiArray",
+        conn = writer.add_connection('/controller_state', 'std_msgs/msg/Float64MultiArray',
                                      typestore=store)
         for row in rows:
-            msg = Array(layout=Layout(dim=[Dim(label=",".join(STATE_FIELDS),
+            msg = Array(layout=Layout(dim=[Dim(label=','.join(STATE_FIELDS),
                                                size=len(STATE_FIELDS),
                                                stride=len(STATE_FIELDS))], data_offset=0),
                         data=np.asarray(row, dtype=np.float64))
             writer.write(conn, int(round(row[0] * 1e9)), store.serialize_cdr(msg, conn.msgtype))
-    proc = analyze(path, "--json")
+    proc = analyze(path, '--json')
     assert proc.returncode == 0, proc.stderr
-    got = last_json(proc)["bags"][0]["metrics"]
-    assert got["iae"] == pytest.approx(simulation_metrics(case1).iae, rel=0.01)
-    assert got["t_conv"] == pytest.approx(7.0, abs=0.02)
+    got = last_json(proc)['bags'][0]['metrics']
+    assert got['iae'] == pytest.approx(simulation_metrics(case1).iae, rel=0.01)
+    assert got['t_conv'] == pytest.approx(7.0, abs=0.02)
 
 
 def test_several_bags_give_one_table_and_overlaid_plots(case1_bag, tmp_path):
-    other = simulate(DlsmcController(), make_trajectory("sine"), (4.0, 1.0, 0.0), 100.0)
-    second = tmp_path / "start41"
+    other = simulate(DlsmcController(), make_trajectory('sine'), (4.0, 1.0, 0.0), 100.0)
+    second = tmp_path / 'start41'
     write_run_bag(second, other, with_odom=False)
-    proc = analyze(case1_bag, second, "--plots", tmp_path / "plots")
+    proc = analyze(case1_bag, second, '--plots', tmp_path / 'plots')
     assert proc.returncode == 0, proc.stderr
     header = proc.stdout.splitlines()[0]
-    assert "case1" in header and "start41" in header
-    iae_row = next(line for line in proc.stdout.splitlines() if line.startswith("IAE of distance"))
+    assert 'case1' in header and 'start41' in header
+    iae_row = next(line for line in proc.stdout.splitlines() if line.startswith('IAE of distance'))
     assert len(iae_row.split()) == 4 + 2
-    for name in ("trajectory.png", "errors.png", "inputs.png"):
-        assert (tmp_path / "plots" / name).stat().st_size > 10_000
+    for name in ('trajectory.png', 'errors.png', 'inputs.png'):
+        assert (tmp_path / 'plots' / name).stat().st_size > 10_000
 
 
 def test_truncated_bag_is_analysed_up_to_its_last_complete_chunk(case1, tmp_path):
-    directory = tmp_path / "killed"
+    directory = tmp_path / 'killed'
     write_run_bag(directory, case1, chunk_size=64 * 1024, with_odom=False)
-    mcap = directory / "killed_0.mcap"
+    mcap = directory / 'killed_0.mcap'
     data = mcap.read_bytes()
-    cut = tmp_path / "cut.mcap"
+    cut = tmp_path / 'cut.mcap'
     cut.write_bytes(data[: int(len(data) * 0.6)])  # the recorder died mid-chunk
-    proc = analyze(cut, "--json")
+    proc = analyze(cut, '--json')
     assert proc.returncode == 0, proc.stderr
-    warning = [line for line in proc.stderr.splitlines() if "truncated" in line]
-    assert len(warning) == 1 and "lost" in warning[0]
-    result = last_json(proc)["bags"][0]
-    assert result["truncated"]
+    warning = [line for line in proc.stderr.splitlines() if 'truncated' in line]
+    assert len(warning) == 1 and 'lost' in warning[0]
+    result = last_json(proc)['bags'][0]
+    assert result['truncated']
     full = simulation_metrics(case1)
-    assert 0.0 < result["metrics"]["iae"] < full.iae + 1e-9
+    assert 0.0 < result['metrics']['iae'] < full.iae + 1e-9
 
 
-@pytest.mark.parametrize("make, needle", [
-    (lambda d: d / "missing", "no such file or directory"),
-    (lambda d: (d / "notes.mcap").write_text("not a bag") and d / "notes.mcap",
-     "not an MCAP file"),
-    (lambda d: d, "no .mcap file in this directory"),
+@pytest.mark.parametrize('make, needle', [
+    (lambda d: d / 'missing', 'no such file or directory'),
+    (lambda d: (d / 'notes.mcap').write_text('not a bag') and d / 'notes.mcap',
+     'not an MCAP file'),
+    (lambda d: d, 'no .mcap file in this directory'),
 ])
 def test_unreadable_inputs_get_one_line(tmp_path, make, needle):
     proc = analyze(make(tmp_path))
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in proc.stderr
+    assert len(lines) == 1 and needle in lines[0] and 'Traceback' not in proc.stderr
 
 
 def test_bag_without_the_state_topic_names_what_is_missing(case1, tmp_path):
-    from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
     from nav_msgs.msg import Odometry
+    from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
     from rclpy.serialization import serialize_message
 
-    with BagWriter(tmp_path / "odom_only") as writer:
-        writer.add_topic("/odom", "nav_msgs/msg/Odometry", [QosProfile()])
-        writer.write("/odom", 0, serialize_message(Odometry()))
-    proc = analyze(tmp_path / "odom_only")
+    with BagWriter(tmp_path / 'odom_only') as writer:
+        writer.add_topic('/odom', 'nav_msgs/msg/Odometry', [QosProfile()])
+        writer.write('/odom', 0, serialize_message(Odometry()))
+    proc = analyze(tmp_path / 'odom_only')
     assert proc.returncode == 2
     line = proc.stderr.strip()
-    assert "no /controller_state messages" in line and "/odom" in line
+    assert 'no /controller_state messages' in line and '/odom' in line

@@ -2,13 +2,12 @@
 
 import math
 
+from nfmr_dlsmc.core.angles import wrap_angle, wrap_angles, yaw_from_quaternion
 import numpy as np
 import pytest
 
-from nfmr_dlsmc.angles import wrap_angle, wrap_angles, yaw_from_quaternion
 
-
-@pytest.mark.parametrize("yaw", [0.0, 0.3, -2.0, math.pi - 1e-9, -math.pi + 1e-9, 3.0])
+@pytest.mark.parametrize('yaw', [0.0, 0.3, -2.0, math.pi - 1e-9, -math.pi + 1e-9, 3.0])
 def test_yaw_of_a_rotation_about_z_round_trips(yaw):
     q = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
     assert yaw_from_quaternion(*q) == pytest.approx(yaw, abs=1e-12)
@@ -31,7 +30,7 @@ def test_the_yaw_of_a_tilted_pose_is_the_heading_of_its_x_axis():
     assert yaw_from_quaternion(*q) == pytest.approx(1.0, abs=1e-12)
 
 
-@pytest.mark.parametrize("q", [(0.0, 0.0, 0.0, 0.0), (1e-12, 0.0, 0.0, 0.0),
+@pytest.mark.parametrize('q', [(0.0, 0.0, 0.0, 0.0), (1e-12, 0.0, 0.0, 0.0),
                                (0.0, 0.0, math.nan, 1.0), (0.0, 0.0, 0.0, math.inf),
                                (1e308, 1e308, 1e308, 1e308)])
 def test_a_quaternion_that_is_no_rotation_gives_nan(q):

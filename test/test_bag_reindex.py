@@ -1,31 +1,30 @@
 """nfmr-reindex: a bag cut by a killed recorder, rebuilt and read by independent readers."""
 
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
-import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
+from nfmr_dlsmc.bag.reader import read_bag
+from nfmr_dlsmc.bag.reindex import reindex
+from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.rosbag2 import Reader
 from std_msgs.msg import Float64MultiArray
 
-from nfmr_dlsmc.bag_reader import read_bag
-from nfmr_dlsmc.bag_reindex import reindex
-from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
-
-REINDEX = str(Path(sys.executable).parent / "nfmr-reindex")
+REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 
 
 def cut_bag(tmp_path, keep_fraction=0.7):
     """A bag whose writer never finished, cut inside a chunk, without metadata.yaml."""
-    bag = tmp_path / "bag"
+    bag = tmp_path / 'bag'
     writer = BagWriter(bag, chunk_size=4096)
-    writer.add_topic("/state", "std_msgs/msg/Float64MultiArray",
-                     [QosProfile(durability="transient_local", depth=7)])
+    writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray',
+                     [QosProfile(durability='transient_local', depth=7)])
     for k in range(3000):
-        writer.write("/state", 5 * 10**9 + k * 10**6,
+        writer.write('/state', 5 * 10**9 + k * 10**6,
                      serialize_message(Float64MultiArray(data=[float(k)] * 8)))
     writer._stream.flush()  # what the disk holds when the recorder is killed
     data = writer.path.read_bytes()
@@ -39,13 +38,13 @@ def test_a_cut_bag_is_rebuilt_from_its_complete_chunks(tmp_path):
     assert before.truncated and 1000 < len(before.messages) < 3000
     result = reindex(bag)
     assert result.rebuilt and result.messages == len(before.messages)
-    assert (bag / "bag_0.mcap.before-reindex").is_file()
+    assert (bag / 'bag_0.mcap.before-reindex').is_file()
     with Reader(bag) as reader:  # rosbags: metadata.yaml and a finished MCAP file
         assert reader.message_count == len(before.messages)
         assert reader.start_time == 5 * 10**9
         (connection,) = reader.connections
-        assert "transient_local" in str(connection.ext.offered_qos_profiles).lower()
-    with (bag / "bag_0.mcap").open("rb") as stream:
+        assert 'transient_local' in str(connection.ext.offered_qos_profiles).lower()
+    with (bag / 'bag_0.mcap').open('rb') as stream:
         values = [m.data[0] for _, _, _, m in make_reader(
             stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages()]
     assert values == [float(k) for k in range(len(before.messages))]
@@ -53,19 +52,19 @@ def test_a_cut_bag_is_rebuilt_from_its_complete_chunks(tmp_path):
 
 
 def test_a_complete_bag_is_left_alone(tmp_path):
-    with BagWriter(tmp_path / "bag") as writer:
-        writer.add_topic("/s", "std_msgs/msg/Float64MultiArray", [QosProfile()])
-        writer.write("/s", 1, serialize_message(Float64MultiArray(data=[1.0])))
-    size = (tmp_path / "bag" / "bag_0.mcap").stat().st_size
-    proc = subprocess.run([REINDEX, str(tmp_path / "bag")], capture_output=True, text=True,
+    with BagWriter(tmp_path / 'bag') as writer:
+        writer.add_topic('/s', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
+        writer.write('/s', 1, serialize_message(Float64MultiArray(data=[1.0])))
+    size = (tmp_path / 'bag' / 'bag_0.mcap').stat().st_size
+    proc = subprocess.run([REINDEX, str(tmp_path / 'bag')], capture_output=True, text=True,
                           timeout=60)
-    assert proc.returncode == 0 and "nothing to do" in proc.stdout
-    assert (tmp_path / "bag" / "bag_0.mcap").stat().st_size == size
+    assert proc.returncode == 0 and 'nothing to do' in proc.stdout
+    assert (tmp_path / 'bag' / 'bag_0.mcap').stat().st_size == size
 
 
-@pytest.mark.parametrize("make, needle", [
-    (lambda d: d / "missing", "no such file"),
-    (lambda d: (d / "x.mcap").write_bytes(b"not an mcap") and d / "x.mcap", "not an MCAP file"),
+@pytest.mark.parametrize('make, needle', [
+    (lambda d: d / 'missing', 'no such file'),
+    (lambda d: (d / 'x.mcap').write_bytes(b'not an mcap') and d / 'x.mcap', 'not an MCAP file'),
 ])
 def test_what_is_not_a_bag_is_one_line_and_exit_2(tmp_path, make, needle):
     proc = subprocess.run([REINDEX, str(make(tmp_path))], capture_output=True, text=True,
@@ -77,11 +76,11 @@ def test_what_is_not_a_bag_is_one_line_and_exit_2(tmp_path, make, needle):
 def test_a_corrupted_chunk_ends_the_bag_where_it_starts(tmp_path):
     # Bytes flipped inside a compressed chunk (a bad zstd frame): read up to it, no error;
     # nfmr-analyze and nfmr-reindex then work from the readable part.
-    bag = tmp_path / "bag"
+    bag = tmp_path / 'bag'
     with BagWriter(bag, chunk_size=4096) as writer:
-        writer.add_topic("/state", "std_msgs/msg/Float64MultiArray", [QosProfile()])
+        writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
         for k in range(3000):
-            writer.write("/state", 10**9 + k * 10**6,
+            writer.write('/state', 10**9 + k * 10**6,
                          serialize_message(Float64MultiArray(data=[float(k)] * 8)))
     data = bytearray(writer.path.read_bytes())
     middle = len(data) // 2

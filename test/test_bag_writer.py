@@ -4,25 +4,24 @@ import math
 from pathlib import Path
 from typing import NamedTuple
 
-import pytest
-import yaml
+from decoding import plain
 from geometry_msgs.msg import Twist
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nav_msgs.msg import Odometry
+from nfmr_dlsmc.bag.writer import BagWriter, message_definition, QosProfile, type_hash
+import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.rosbag2 import Reader
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+import yaml
 
-from decoding import plain
-from nfmr_dlsmc.bag_writer import BagWriter, QosProfile, message_definition, type_hash
-
-TYPES = {"/odom": ("nav_msgs/msg/Odometry", Odometry),
-         "/cmd_vel": ("geometry_msgs/msg/Twist", Twist),
-         "/joint_states": ("sensor_msgs/msg/JointState", JointState),
-         "/state": ("std_msgs/msg/Float64MultiArray", Float64MultiArray)}
+TYPES = {'/odom': ('nav_msgs/msg/Odometry', Odometry),
+         '/cmd_vel': ('geometry_msgs/msg/Twist', Twist),
+         '/joint_states': ('sensor_msgs/msg/JointState', JointState),
+         '/state': ('std_msgs/msg/Float64MultiArray', Float64MultiArray)}
 
 
 def sample_messages():
@@ -30,20 +29,20 @@ def sample_messages():
         t = k * 1_000_000
         odom = Odometry()
         odom.header.stamp.nanosec = t
-        odom.header.frame_id, odom.child_frame_id = "odom", "base_link"
+        odom.header.frame_id, odom.child_frame_id = 'odom', 'base_link'
         odom.pose.pose.position.x = 0.5 * k
         odom.pose.pose.orientation.z = math.sin(k / 100)
-        yield "/odom", t, odom
+        yield '/odom', t, odom
         twist = Twist()
         twist.linear.x, twist.angular.z = 0.2 + k, -1.59
-        yield "/cmd_vel", t, twist
+        yield '/cmd_vel', t, twist
         if k % 10 == 0:
-            js = JointState(name=["front_left_steer", "front_left_drive"],
+            js = JointState(name=['front_left_steer', 'front_left_drive'],
                             position=[0.1 * k, 2.0], velocity=[0.0, 7.1], effort=[1.0, 200.0])
-            yield "/joint_states", t, js
+            yield '/joint_states', t, js
         state = Float64MultiArray(data=[float(k), math.pi, -1e-9])
-        state.layout.dim = [MultiArrayDimension(label="t,a,b", size=3, stride=3)]
-        yield "/state", t, state
+        state.layout.dim = [MultiArrayDimension(label='t,a,b', size=3, stride=3)]
+        yield '/state', t, state
 
 
 class Bag(NamedTuple):
@@ -53,7 +52,7 @@ class Bag(NamedTuple):
 
 @pytest.fixture
 def bag(tmp_path):
-    directory = tmp_path / "run"
+    directory = tmp_path / 'run'
     written = []
     with BagWriter(directory, chunk_size=4096) as writer:
         for topic, (type_name, _) in TYPES.items():
@@ -66,11 +65,11 @@ def bag(tmp_path):
 
 
 def test_schema_carries_dependencies_like_rosbag2():
-    text = message_definition("nav_msgs/msg/Odometry")
-    assert text.startswith("# This represents an estimate")
-    assert "\n" + "=" * 80 + "\nMSG: std_msgs/Header\n" in text
-    assert "MSG: geometry_msgs/PoseWithCovariance" in text
-    assert type_hash("nav_msgs/msg/Odometry").startswith("RIHS01_")
+    text = message_definition('nav_msgs/msg/Odometry')
+    assert text.startswith('# This represents an estimate')
+    assert '\n' + '=' * 80 + '\nMSG: std_msgs/Header\n' in text
+    assert 'MSG: geometry_msgs/PoseWithCovariance' in text
+    assert type_hash('nav_msgs/msg/Odometry').startswith('RIHS01_')
 
 
 def rclpy_decoded():
@@ -79,7 +78,7 @@ def rclpy_decoded():
 
 def test_mcap_ros2_reader_decodes_every_message_from_the_embedded_schemas(bag):
     want = rclpy_decoded()
-    with (bag.path / "run_0.mcap").open("rb") as stream:
+    with (bag.path / 'run_0.mcap').open('rb') as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         got = [(c.topic, m.log_time, plain(d)) for _, c, m, d in reader.iter_decoded_messages()]
     assert got == want
@@ -92,8 +91,8 @@ def test_rosbags_reads_the_directory_with_its_jazzy_typestore(bag):
         assert reader.message_count == len(want)
         got = [(c.topic, t, raw) for c, t, raw in reader.messages()]
         conns = {c.topic: c for c in reader.connections}
-        assert conns["/odom"].ext.offered_qos_profiles[0].depth == 1000
-        assert conns["/odom"].digest == type_hash("nav_msgs/msg/Odometry")
+        assert conns['/odom'].ext.offered_qos_profiles[0].depth == 1000
+        assert conns['/odom'].digest == type_hash('nav_msgs/msg/Odometry')
     assert len(got) == len(want)
     for (topic, t, raw), (_, t_want, fields), (_, _, raw_expected) in zip(got, want, raw_want):
         assert t == t_want and raw == raw_expected
@@ -102,50 +101,50 @@ def test_rosbags_reads_the_directory_with_its_jazzy_typestore(bag):
 
 def test_rclpy_deserialises_every_payload(bag):
     want = bag.written
-    with (bag.path / "run_0.mcap").open("rb") as stream:
+    with (bag.path / 'run_0.mcap').open('rb') as stream:
         got = list(make_reader(stream).iter_messages())
     assert len(got) == len(want)
     for (topic, _, raw), (_, channel, message) in zip(want, got):
         assert message.data == raw
         assert plain(deserialize_message(message.data, TYPES[topic][1])) == \
             plain(deserialize_message(raw, TYPES[topic][1]))
-        assert channel.message_encoding == "cdr"
+        assert channel.message_encoding == 'cdr'
 
 
 def test_metadata_yaml_is_version_9(bag):
-    info = yaml.safe_load((bag.path / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert info["version"] == 9 and info["storage_identifier"] == "mcap"
-    assert info["relative_file_paths"] == ["run_0.mcap"]
-    counts = {t["topic_metadata"]["name"]: t["message_count"]
-              for t in info["topics_with_message_count"]}
-    assert counts == {"/odom": 200, "/cmd_vel": 200, "/joint_states": 20, "/state": 200}
-    assert info["message_count"] == 620
-    assert info["duration"]["nanoseconds"] == 199_000_000
-    for topic in info["topics_with_message_count"]:
-        meta = topic["topic_metadata"]
-        assert isinstance(meta["offered_qos_profiles"], list)
-        assert meta["offered_qos_profiles"][0]["reliability"] == "reliable"
-        assert meta["type_description_hash"] == type_hash(meta["type"])
-        assert meta["serialization_format"] == "cdr"
+    info = yaml.safe_load((bag.path / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert info['version'] == 9 and info['storage_identifier'] == 'mcap'
+    assert info['relative_file_paths'] == ['run_0.mcap']
+    counts = {t['topic_metadata']['name']: t['message_count']
+              for t in info['topics_with_message_count']}
+    assert counts == {'/odom': 200, '/cmd_vel': 200, '/joint_states': 20, '/state': 200}
+    assert info['message_count'] == 620
+    assert info['duration']['nanoseconds'] == 199_000_000
+    for topic in info['topics_with_message_count']:
+        meta = topic['topic_metadata']
+        assert isinstance(meta['offered_qos_profiles'], list)
+        assert meta['offered_qos_profiles'][0]['reliability'] == 'reliable'
+        assert meta['type_description_hash'] == type_hash(meta['type'])
+        assert meta['serialization_format'] == 'cdr'
 
 
 def test_mcap_has_the_ros2_profile_and_rosbag2_record(bag):
-    with (bag.path / "run_0.mcap").open("rb") as stream:
+    with (bag.path / 'run_0.mcap').open('rb') as stream:
         reader = make_reader(stream)
-        assert reader.get_header().profile == "ros2"
+        assert reader.get_header().profile == 'ros2'
         summary = reader.get_summary()
-        assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
+        assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
         for channel in summary.channels.values():
-            assert yaml.safe_load(channel.metadata["offered_qos_profiles"])[0]["depth"] == 1000
-            assert channel.metadata["topic_type_hash"].startswith("RIHS01_")
+            assert yaml.safe_load(channel.metadata['offered_qos_profiles'])[0]['depth'] == 1000
+            assert channel.metadata['topic_type_hash'].startswith('RIHS01_')
         records = list(reader.iter_metadata())
-    assert [r.name for r in records] == ["rosbag2"]
-    assert yaml.safe_load(records[0].metadata["serialized_metadata"])["version"] == 9
+    assert [r.name for r in records] == ['rosbag2']
+    assert yaml.safe_load(records[0].metadata['serialized_metadata'])['version'] == 9
 
 
 def test_finish_is_idempotent_and_directories_are_never_reused(tmp_path):
-    writer = BagWriter(tmp_path / "b")
+    writer = BagWriter(tmp_path / 'b')
     writer.finish()
     writer.finish()
     with pytest.raises(FileExistsError):
-        BagWriter(tmp_path / "b")
+        BagWriter(tmp_path / 'b')

@@ -1,4 +1,5 @@
-"""Tests that catch the bugs that matter: each one kills a plausible mutant that the rest
+"""
+Tests that catch the bugs that matter: each one kills a plausible mutant that the rest
 of the suite let through (the mutant it kills is named in each docstring).
 
 Golden numbers come from the paper (Zhang et al. 2023, Table 2), from hand computation or
@@ -10,25 +11,24 @@ import math
 import threading
 from types import SimpleNamespace
 
+from mcap.reader import make_reader
+from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance, YawRatePulse
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains
+from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop, BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.trajectories import Sine
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.ros import controller_node
+from nfmr_dlsmc.runtime.params import controller_parameter_defaults, controller_params
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 import numpy as np
 import pytest
-import yaml
-from mcap.reader import make_reader
 from rclpy.serialization import serialize_message
 from rosbags.rosbag2 import Reader
 from std_msgs.msg import Float64MultiArray
-
-from nfmr_dlsmc import controller_node
-from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
-from nfmr_dlsmc.disturbances import YawRateDisturbance, YawRatePulse, paper_disturbance
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains
-from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.params import controller_parameter_defaults, controller_params
-from nfmr_dlsmc.tracking_session import TrackingSession
-from nfmr_dlsmc.trajectories import Sine
+import yaml
 
 EPS = InnerLoopGains().eps  # 0.01 rad, the paper's barrier half-width
 R1 = 23 / 33  # q1/p1 of the paper
@@ -42,7 +42,8 @@ def _omega(s, eta, thetadot_d=0.0, k1=1.0):
 
 
 def test_inner_loop_phase_switch_at_half_eps_and_fallback_at_eps_by_hand():
-    """Kills M1 (barrier entered at |s| <= eps) and M2 (barrier gain lam|s|/eps).
+    """
+    Kills M1 (barrier entered at |s| <= eps) and M2 (barrier gain lam|s|/eps).
 
     Paper gains L0 = 1, L1 = 1.2, lam = 1, eps = 0.01, k1 = 1, dt = 1 ms; every eta below
     is computed by hand from eqs (12), (13): the integral is a left Riemann sum, the
@@ -67,15 +68,17 @@ def test_inner_loop_phase_switch_at_half_eps_and_fallback_at_eps_by_hand():
     ]
     for k, (s, phase, eta) in enumerate(steps):
         omega = loop.step(s, 0.0, dt)
-        assert loop.phase == phase, f"step {k}: s = {s}"
-        assert loop.eta_hat == pytest.approx(eta, rel=1e-12, abs=1e-15), f"step {k}: s = {s}"
-        assert omega == pytest.approx(_omega(s, eta), rel=1e-12), f"step {k}: s = {s}"
+        assert loop.phase == phase, f'step {k}: s = {s}'
+        assert loop.eta_hat == pytest.approx(eta, rel=1e-12, abs=1e-15), f'step {k}: s = {s}'
+        assert omega == pytest.approx(_omega(s, eta), rel=1e-12), f'step {k}: s = {s}'
 
 
-@pytest.mark.parametrize("s", [0.0051, 0.0075, 0.0099])
+@pytest.mark.parametrize('s', [0.0051, 0.0075, 0.0099])
 def test_between_half_eps_and_eps_the_gain_keeps_integrating(s):
-    """Kills M1: a fresh loop held at eps/2 < |s| < eps never reaches t_bar; its eta_hat
-    is the integral of L0 + L1 |s| (hand value k dt (L0 + L1 |s|) after k steps)."""
+    """
+    Kills M1: a fresh loop held at eps/2 < |s| < eps never reaches t_bar; its eta_hat
+    is the integral of L0 + L1 |s| (hand value k dt (L0 + L1 |s|) after k steps).
+    """
     loop = AbfsmcInnerLoop(InnerLoopGains())
     for k in range(50):
         loop.step(-s, 0.0, 0.001)
@@ -95,7 +98,8 @@ def test_barrier_gain_by_hand():
 
 
 def test_barrier_holds_theta_e_inside_eps_against_a_pulse_a_barrier_free_law_cannot():
-    """Kills M2 in closed loop (M1 leaves this run unchanged: the unit tests above kill it).
+    """
+    Kills M2 in closed loop (M1 leaves this run unchanged: the unit tests above kill it).
 
     Case 1, converged (t_conv ~ 7 s); then yaw-rate pulses of +1.2 rad/s on [30, 31) s and
     -1.2 rad/s on [40, 41) s. Inside the band a barrier-free law can oppose at most
@@ -116,13 +120,13 @@ def test_barrier_holds_theta_e_inside_eps_against_a_pulse_a_barrier_free_law_can
     r = simulate(DlsmcController(), Sine(), (1.0, 4.0, 0.0), 46.0, 0.001, dist)
     assert simulation_metrics(r).t_conv < 15.0
     window = r.t >= 25.0
-    theta_e = np.abs(r.telemetry["theta_e"][window])
-    phase = r.telemetry["inner_phase"][window]
-    eta = r.telemetry["eta_hat"][window]
+    theta_e = np.abs(r.telemetry['theta_e'][window])
+    phase = r.telemetry['inner_phase'][window]
+    eta = r.telemetry['eta_hat'][window]
     pulse = r.disturbance[window] != 0.0
     assert eta[pulse].max() > barrier_free_max  # the disturbance really needed the barrier
     assert theta_e.max() < EPS
-    assert np.all(phase == BARRIER_PHASE), f"{np.sum(phase != BARRIER_PHASE)} fallback ticks"
+    assert np.all(phase == BARRIER_PHASE), f'{np.sum(phase != BARRIER_PHASE)} fallback ticks'
 
 
 # -- M3: the thetadot_d feed-forward of the cascade ------------------------------------------
@@ -145,7 +149,8 @@ class _RotatingOuter:
 
 
 def test_omega_carries_the_thetadot_d_feed_forward():
-    """Kills M3 (inner loop stepped with 0 instead of thetadot_d), default 'difference'.
+    """
+    Kills M3 (inner loop stepped with 0 instead of thetadot_d), default 'difference'.
 
     theta_d turns at w = 0.8 rad/s and the robot heads exactly along theta_d, so
     s_theta = 0 and eq. (11) gives omega = thetadot_d = w (the backward difference of a
@@ -153,7 +158,7 @@ def test_omega_carries_the_thetadot_d_feed_forward():
     design). M3 gives omega = 0.
     """
     config = DlsmcConfig()
-    assert config.thetadot_source == "difference" and config.thetadot_filter == 0.0
+    assert config.thetadot_source == 'difference' and config.thetadot_filter == 0.0
     ctrl = DlsmcController(config)
     w, dt = 0.8, config.dt
     ctrl.outer = _RotatingOuter(w, dt)
@@ -164,12 +169,12 @@ def test_omega_carries_the_thetadot_d_feed_forward():
         assert abs(ctrl.s_theta) < 1e-12
         expected = 0.0 if k == 0 else w
         assert ctrl.thetadot_d == pytest.approx(expected, abs=1e-9)
-        assert omega == pytest.approx(expected, abs=1e-6), f"step {k}"
+        assert omega == pytest.approx(expected, abs=1e-6), f'step {k}'
 
 
 # -- M3, M4: Table 2 with the figures the feed-forward and the integrator decide ----------
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def case1():
     """Paper Case 1: x0 = (1, 4, 0), sine x_d = 0.5 t, y_d = sin(0.5 x_d), 100 s, 1 ms."""
     r = simulate(DlsmcController(), Sine(), (1.0, 4.0, 0.0), 100.0, 0.001)
@@ -177,7 +182,8 @@ def case1():
 
 
 def test_case1_table2_and_the_inner_loop_figures(case1):
-    """Table 2 (paper) plus figures pinned to our own output, which M3 and M4 move.
+    """
+    Table 2 (paper) plus figures pinned to our own output, which M3 and M4 move.
 
     Paper Table 2, DLSMC: IAE 13.5757, ISE 37.1057, STD 0.5938; we sit at -1.7 %, -1.4 %,
     -0.7 % (13.3473, 36.5811, 0.5899); M3 and M4 sit there too (13.343, 13.349), so the
@@ -203,8 +209,10 @@ def test_case1_table2_and_the_inner_loop_figures(case1):
 
 
 def test_case2_theta_e_stays_inside_eps_after_convergence():
-    """Paper Case 2: x0 = (1, 1, pi/6), pulses of 0.5 rad/s on [5, 5.5) and [50, 50.5) s;
-    after convergence |theta_e| < eps = 0.01 rad (the second pulse included)."""
+    """
+    Paper Case 2: x0 = (1, 1, pi/6), pulses of 0.5 rad/s on [5, 5.5) and [50, 50.5) s;
+    after convergence |theta_e| < eps = 0.01 rad (the second pulse included).
+    """
     r = simulate(DlsmcController(), Sine(), (1.0, 1.0, math.pi / 6), 100.0, 0.001,
                  paper_disturbance())
     m = simulation_metrics(r)
@@ -233,14 +241,17 @@ class _ConstantInputs:
 
 
 def test_one_euler_step_by_hand():
-    """Kills M4: from (0, 0, 0) with v = 1 m/s, omega = 1 rad/s and dt = 0.1 s, forward
-    Euler gives (0.1, 0, 0.1); the semi-implicit step gives y = 0.1 sin 0.1 = 0.00998."""
+    """
+    Kills M4: from (0, 0, 0) with v = 1 m/s, omega = 1 rad/s and dt = 0.1 s, forward
+    Euler gives (0.1, 0, 0.1); the semi-implicit step gives y = 0.1 sin 0.1 = 0.00998.
+    """
     r = simulate(_ConstantInputs(1.0, 1.0), Sine(), (0.0, 0.0, 0.0), 0.1, 0.1)
     assert r.final_state == pytest.approx([0.1, 0.0, 0.1], abs=1e-15)
 
 
 def test_euler_matches_the_closed_form_sum_for_constant_inputs():
-    """Kills M4: with constant v, w the forward-Euler recurrence sums a geometric series,
+    """
+    Kills M4: with constant v, w the forward-Euler recurrence sums a geometric series,
 
         x_N = x0 + v dt sum_{k<N} cos(th0 + k w dt)
             = x0 + v dt sin(N w dt / 2) / sin(w dt / 2) cos(th0 + (N - 1) w dt / 2),
@@ -260,9 +271,11 @@ def test_euler_matches_the_closed_form_sum_for_constant_inputs():
 
 
 def test_closed_loop_states_follow_forward_euler_of_the_recorded_inputs():
-    """Kills M4 in the closed loop: every recorded step of Case 2 satisfies
+    """
+    Kills M4 in the closed loop: every recorded step of Case 2 satisfies
     q[k+1] = q[k] + dt (v_k cos th_k, v_k sin th_k, omega_k + varpi_k) (the inputs the
-    controller applied, the heading before the step)."""
+    controller applied, the heading before the step).
+    """
     dt = 0.001
     r = simulate(DlsmcController(), Sine(), (1.0, 1.0, math.pi / 6), 12.0, dt,
                  paper_disturbance())
@@ -276,28 +289,30 @@ def test_closed_loop_states_follow_forward_euler_of_the_recorded_inputs():
 # -- M5: starting_time of the bag ---------------------------------------------------------
 
 def test_bag_starting_time_is_the_first_message_time(tmp_path):
-    """Kills M5 (starting_time 0 in metadata.yaml): a bag whose messages start at
+    """
+    Kills M5 (starting_time 0 in metadata.yaml): a bag whose messages start at
     1.7e18 ns, read back from metadata.yaml, from the rosbag2 record inside the MCAP file,
-    and by the independent ``rosbags`` reader."""
+    and by the independent ``rosbags`` reader.
+    """
     t0 = 1_700_000_000_000_000_000
     times = [t0, t0 + 1_000_000, t0 + 500_000_000]
-    directory = tmp_path / "late_bag"
+    directory = tmp_path / 'late_bag'
     with BagWriter(directory) as writer:
-        writer.add_topic("/state", "std_msgs/msg/Float64MultiArray", [QosProfile()])
+        writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
         for k, t in enumerate(times):
-            writer.write("/state", t, serialize_message(Float64MultiArray(data=[float(k)])))
+            writer.write('/state', t, serialize_message(Float64MultiArray(data=[float(k)])))
     duration = times[-1] - t0
 
-    info = yaml.safe_load((directory / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert info["starting_time"]["nanoseconds_since_epoch"] == t0
-    assert info["duration"]["nanoseconds"] == duration
-    assert info["files"][0]["starting_time"]["nanoseconds_since_epoch"] == t0
-    assert info["files"][0]["duration"]["nanoseconds"] == duration
+    info = yaml.safe_load((directory / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert info['starting_time']['nanoseconds_since_epoch'] == t0
+    assert info['duration']['nanoseconds'] == duration
+    assert info['files'][0]['starting_time']['nanoseconds_since_epoch'] == t0
+    assert info['files'][0]['duration']['nanoseconds'] == duration
 
-    with (directory / "late_bag_0.mcap").open("rb") as stream:
-        records = [m for m in make_reader(stream).iter_metadata() if m.name == "rosbag2"]
-    embedded = yaml.safe_load(records[0].metadata["serialized_metadata"])
-    assert embedded["starting_time"]["nanoseconds_since_epoch"] == t0
+    with (directory / 'late_bag_0.mcap').open('rb') as stream:
+        records = [m for m in make_reader(stream).iter_metadata() if m.name == 'rosbag2']
+    embedded = yaml.safe_load(records[0].metadata['serialized_metadata'])
+    assert embedded['starting_time']['nanoseconds_since_epoch'] == t0
 
     with Reader(directory) as reader:
         assert reader.start_time == t0
@@ -321,16 +336,18 @@ def _feed_until(session, t_last, period=0.001):
     n = int(round(t_last / period))
     for k in range(n + 1):
         t = k * period
-        session.on_odometry(1.0, 4.0, 0.0, t, t, t, "odom")
+        session.on_odometry(1.0, 4.0, 0.0, t, t, t, 'odom')
         assert not session.tick(t, t).stopped
 
 
 def test_stale_odometry_stops_within_one_watchdog_period_of_the_timeout():
-    """Kills M6 in the session or in the node's options (odom_timeout effectively
+    """
+    Kills M6 in the session or in the node's options (odom_timeout effectively
     +0.1 s): ticking every watchdog period after the last odometry, the first stopped tick
-    comes no later than odom_timeout + watchdog_period, and not before odom_timeout."""
+    comes no later than odom_timeout + watchdog_period, and not before odom_timeout.
+    """
     values, session = _node_session()
-    timeout, period = values["odom_timeout"], values["watchdog_period"]
+    timeout, period = values['odom_timeout'], values['watchdog_period']
     assert (timeout, period) == (0.25, 0.01)  # the shipped defaults
     assert session.odom_timeout == timeout
     t_last = 1.0
@@ -341,7 +358,7 @@ def test_stale_odometry_stops_within_one_watchdog_period_of_the_timeout():
         out = session.tick(wall, wall)
         if out.stopped:
             first_stop = wall - t_last
-            assert "old" in out.report
+            assert 'old' in out.report
             break
         assert wall - t_last <= timeout + 1e-9  # never tracks on odometry older than that
     assert first_stop is not None
@@ -349,26 +366,28 @@ def test_stale_odometry_stops_within_one_watchdog_period_of_the_timeout():
 
 
 def test_node_watchdog_stops_within_one_watchdog_period_of_the_timeout(monkeypatch):
-    """Kills M6 in the node's watchdog (ControllerNode._watchdog comparing with a late
+    """
+    Kills M6 in the node's watchdog (ControllerNode._watchdog comparing with a late
     timeout), in process: the node's own watchdog method on a stand-in node, with its
-    clock replaced, called every watchdog period after the last odometry."""
+    clock replaced, called every watchdog period after the last odometry.
+    """
     values, session = _node_session()
-    timeout, period = values["odom_timeout"], values["watchdog_period"]
-    now = {"wall": 0.0}
-    monkeypatch.setattr(controller_node, "time", SimpleNamespace(monotonic=lambda: now["wall"]))
+    timeout, period = values['odom_timeout'], values['watchdog_period']
+    now = {'wall': 0.0}
+    monkeypatch.setattr(controller_node, 'time', SimpleNamespace(monotonic=lambda: now['wall']))
     outputs = []
     node = SimpleNamespace(
-        _values=values, session=session, _lock=threading.Lock(), _now=lambda: now["wall"],
-        _tick=lambda control_time: outputs.append(session.tick(control_time, now["wall"])))
+        _values=values, session=session, _lock=threading.Lock(), _now=lambda: now['wall'],
+        _tick=lambda control_time: outputs.append(session.tick(control_time, now['wall'])))
     t_last = 1.0
     _feed_until(session, t_last)
     first_stop = None
     for j in range(1, 200):
-        now["wall"] = t_last + j * period
+        now['wall'] = t_last + j * period
         controller_node.ControllerNode._watchdog(node)
         if outputs:
             assert outputs[0].stopped
-            first_stop = now["wall"] - t_last
+            first_stop = now['wall'] - t_last
             break
     assert first_stop is not None
     assert timeout < first_stop <= timeout + period + 1e-9

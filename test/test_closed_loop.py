@@ -2,29 +2,28 @@
 
 import math
 
+from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance, YawRatePulse
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.plants.kinematic import simulate
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.disturbances import YawRateDisturbance, YawRatePulse, paper_disturbance
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.trajectories import make_trajectory
-from nfmr_dlsmc.validation import ParameterError
 
 EPS = 0.01  # [rad]
 CASE2_X0 = (1.0, 1.0, math.pi / 6)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def case1():
-    return simulate(DlsmcController(), make_trajectory("sine"), (1.0, 4.0, 0.0), 100.0)
+    return simulate(DlsmcController(), make_trajectory('sine'), (1.0, 4.0, 0.0), 100.0)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def case2():
-    return simulate(DlsmcController(), make_trajectory("sine"), CASE2_X0, 100.0,
+    return simulate(DlsmcController(), make_trajectory('sine'), CASE2_X0, 100.0,
                     disturbance=paper_disturbance())
 
 
@@ -42,21 +41,21 @@ def test_case1_inputs_respect_limits(case1):
 
 
 def test_case1_exercises_the_barrier_fallback_and_still_converges(case1):
-    phase = case1.telemetry["inner_phase"]
+    phase = case1.telemetry['inner_phase']
     fallbacks = np.flatnonzero((phase[:-1] == BARRIER_PHASE) & (phase[1:] == INTEGRAL_PHASE))
     assert fallbacks.size > 0
-    assert np.all(np.isfinite(case1.telemetry["eta_hat"]))
+    assert np.all(np.isfinite(case1.telemetry['eta_hat']))
     assert simulation_metrics(case1).final_distance < 1e-4
 
 
 def _first_inner_convergence(result) -> int:
-    hits = np.flatnonzero(np.abs(result.telemetry["theta_e"]) <= EPS / 2)
-    assert hits.size > 0, "|theta_e| never reached eps/2"
+    hits = np.flatnonzero(np.abs(result.telemetry['theta_e']) <= EPS / 2)
+    assert hits.size > 0, '|theta_e| never reached eps/2'
     return int(hits[0])
 
 
 def test_case2_theta_e_stays_in_band_outside_the_pulses(case2):
-    t, theta_e = case2.t, case2.telemetry["theta_e"]
+    t, theta_e = case2.t, case2.telemetry['theta_e']
     start = _first_inner_convergence(case2)
     mask = t >= t[start]
     for pulse_start in (5.0, 50.0):
@@ -77,8 +76,8 @@ def test_case2_inputs_respect_limits(case2):
 STARTS = [(1.0, 4.0, 0.0), (-2.0, -1.0, math.pi), (3.0, -2.0, -2.0)]
 
 
-@pytest.mark.parametrize("name", ["sine", "circle", "line", "lemniscate"])
-@pytest.mark.parametrize("x0", STARTS[1:])
+@pytest.mark.parametrize('name', ['sine', 'circle', 'line', 'lemniscate'])
+@pytest.mark.parametrize('x0', STARTS[1:])
 def test_theorems_hold_across_trajectories_and_starts(name, x0):
     r = simulate(DlsmcController(), make_trajectory(name), x0, 40.0)
     m = simulation_metrics(r)
@@ -86,7 +85,7 @@ def test_theorems_hold_across_trajectories_and_starts(name, x0):
     assert m.t_conv is not None and m.t_conv < 20.0
     assert m.final_distance < 1e-4
     # Theorem 2 / Remark 4: the outer sliding variables start at 0 and stay bounded.
-    s = np.hypot(r.telemetry["s_x"], r.telemetry["s_y"])
+    s = np.hypot(r.telemetry['s_x'], r.telemetry['s_y'])
     assert s[0] == 0.0
     e0 = math.hypot(x0[0], x0[1])
     assert np.max(s) < e0 + 1.0
@@ -96,11 +95,11 @@ def test_theorems_hold_across_trajectories_and_starts(name, x0):
     assert r.t[start] < 10.0
     # ... and while omega is not saturated it stays inside (-eps, eps): every excursion
     # after t_bar follows omega saturation within the preceding 0.2 s.
-    theta_e = r.telemetry["theta_e"]
-    saturated = r.telemetry["omega_saturated"].astype(bool)
+    theta_e = r.telemetry['theta_e']
+    saturated = r.telemetry['omega_saturated'].astype(bool)
     window = int(round(0.2 / r.dt))
     for k in np.flatnonzero(np.abs(theta_e[start:]) >= EPS) + start:
-        assert saturated[max(0, k - window):k + 1].any(), f"excursion at t={r.t[k]:.3f} s"
+        assert saturated[max(0, k - window):k + 1].any(), f'excursion at t={r.t[k]:.3f} s'
     # After convergence the band holds everywhere.
     assert m.max_abs_theta_e_after_conv < EPS
     # Saturation respected.
@@ -111,7 +110,7 @@ def test_theorems_hold_across_trajectories_and_starts(name, x0):
 class _Constant:
     """Open-loop inputs, to check the plant integration on its own."""
 
-    TELEMETRY_FIELDS = ("theta_d",)
+    TELEMETRY_FIELDS = ('theta_d',)
 
     def __init__(self, v, w):
         self.v, self.w = v, w
@@ -128,7 +127,7 @@ class _Constant:
 
 def test_plant_is_forward_euler_of_eq3_with_disturbance():
     dist = YawRateDisturbance((YawRatePulse(0.5, 0.25, 0.4),))
-    r = simulate(_Constant(1.0, 0.0), make_trajectory("line"), (0.0, 0.0, 0.0), 1.0,
+    r = simulate(_Constant(1.0, 0.0), make_trajectory('line'), (0.0, 0.0, 0.0), 1.0,
                  disturbance=dist)
     # theta gains exactly 0.4 rad/s * 0.25 s.
     assert r.final_state[2] == pytest.approx(0.1, abs=1e-9)
@@ -136,18 +135,18 @@ def test_plant_is_forward_euler_of_eq3_with_disturbance():
     expected_x = np.sum(np.cos(theta)) * 0.001
     assert r.final_state[0] == pytest.approx(expected_x, rel=1e-12)
     # Without disturbance: half a circle of radius v / omega = 1 m in pi / omega, to O(dt).
-    r = simulate(_Constant(0.5, 0.5), make_trajectory("line"), (0.0, 0.0, 0.0), 2 * math.pi)
+    r = simulate(_Constant(0.5, 0.5), make_trajectory('line'), (0.0, 0.0, 0.0), 2 * math.pi)
     np.testing.assert_allclose(r.final_state[:2], [0.0, 2.0], atol=2e-3)
 
 
 def test_simulate_rejects_bad_arguments():
     ctrl = DlsmcController()
-    sine = make_trajectory("sine")
-    with pytest.raises(ParameterError, match="x0"):
+    sine = make_trajectory('sine')
+    with pytest.raises(ParameterError, match='x0'):
         simulate(ctrl, sine, (1.0, 2.0), 1.0)
-    with pytest.raises(ParameterError, match=r"x0\[2\] = nan"):
+    with pytest.raises(ParameterError, match=r'x0\[2\] = nan'):
         simulate(ctrl, sine, (1.0, 2.0, math.nan), 1.0)
-    with pytest.raises(ParameterError, match="must equal the controller period"):
+    with pytest.raises(ParameterError, match='must equal the controller period'):
         simulate(ctrl, sine, (1.0, 2.0, 0.0), 1.0, dt=0.002)
-    with pytest.raises(ParameterError, match="duration"):
+    with pytest.raises(ParameterError, match='duration'):
         simulate(ctrl, sine, (1.0, 2.0, 0.0), -1.0)

@@ -1,27 +1,36 @@
-"""Property tests of the ROS-free command gate: whatever floats and arrays arrive, the gate
+"""
+Property tests of the ROS-free command gate: whatever floats and arrays arrive, the gate
 never raises and never lets a non-finite or out-of-limit value through; every input is
-either accepted within the limits or rejected with a reason naming topic, field and rule."""
+either accepted within the limits or rejected with a reason naming topic, field and rule.
+"""
 
 import array
 import math
 
-import numpy as np
-import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-
-from nfmr_dlsmc.steering import RobotGeometry
-from nfmr_sim.command_gate import (STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC, CommandGate,
-                                   Rejection, check_steer, check_wheel_speed, map_twist)
+from nfmr_dlsmc.core.steering import RobotGeometry
+from nfmr_sim.command_gate import (
+    check_steer,
+    check_wheel_speed,
+    CommandGate,
+    map_twist,
+    Rejection,
+    STEER_TOPIC,
+    TWIST_TOPIC,
+    WHEEL_TOPIC,
+)
+import numpy as np
+import pytest
 
 # Overflow or invalid-value warnings would mean a non-finite value was computed unguarded.
-pytestmark = pytest.mark.filterwarnings("error")
+pytestmark = pytest.mark.filterwarnings('error')
 
 GEOMETRY = RobotGeometry()  # Table 1; steer limit pi/2
 SUBNORMAL = 5e-324
 any_float = st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True)
 float_lists = st.lists(any_float, max_size=8)
-as_sent = st.sampled_from([list, np.array, lambda v: array.array("d", v)])  # ROS: array('d')
+as_sent = st.sampled_from([list, np.array, lambda v: array.array('d', v)])  # ROS: array('d')
 bounds = st.floats(min_value=1e-3, max_value=1e6)
 offsets = st.sampled_from([0.0, -0.445, 0.445])  # P: centre, rear axle, front axle [m]
 
@@ -29,7 +38,7 @@ offsets = st.sampled_from([0.0, -0.445, 0.445])  # P: centre, rear axle, front a
 def _assert_rejection(result, topic):
     assert isinstance(result, Rejection)
     message = str(result)
-    assert message.startswith(f"rejected {topic}: {result.field} = ")
+    assert message.startswith(f'rejected {topic}: {result.field} = ')
     assert result.rule and message.endswith(result.rule)
 
 
@@ -38,7 +47,7 @@ def _assert_within(values, bound):
     assert np.all(np.isfinite(values)) and np.all(np.abs(values) <= bound)
 
 
-@pytest.mark.parametrize("check, topic", [(check_steer, STEER_TOPIC),
+@pytest.mark.parametrize('check, topic', [(check_steer, STEER_TOPIC),
                                           (check_wheel_speed, WHEEL_TOPIC)])
 @given(values=float_lists, kind=as_sent, bound=bounds)
 @example(values=[], kind=list, bound=1.0)
@@ -57,23 +66,23 @@ def test_arrays_are_accepted_exactly_when_four_finite_values_within_the_bound(
         _assert_rejection(result, topic)
 
 
-@pytest.mark.parametrize("values, needle", [
-    ([], "len(data) = 0: must be 4 (FL, FR, RL, RR)"),
-    ([1.0] * 5, "len(data) = 5: must be 4"),
-    ([0.0, math.nan, 0.0, 0.0], "data[1] (front_right) = nan rad/s: must be finite, not NaN or inf"),
-    ([0.0, 0.0, -math.inf, 0.0], "data[2] (rear_left) = -inf rad/s: must be finite"),
-    ([0.0, 0.0, 0.0, 1e308], "data[3] (rear_right) = 1e+308 rad/s: must be within +-50 rad/s "
-                             "(motors.max_wheel_speed)"),
+@pytest.mark.parametrize('values, needle', [
+    ([], 'len(data) = 0: must be 4 (FL, FR, RL, RR)'),
+    ([1.0] * 5, 'len(data) = 5: must be 4'),
+    ([0.0, math.nan, 0.0, 0.0], 'data[1] (front_right) = nan rad/s: must be finite, not NaN or inf'),
+    ([0.0, 0.0, -math.inf, 0.0], 'data[2] (rear_left) = -inf rad/s: must be finite'),
+    ([0.0, 0.0, 0.0, 1e308], 'data[3] (rear_right) = 1e+308 rad/s: must be within +-50 rad/s '
+                             '(motors.max_wheel_speed)'),
 ])
 def test_a_rejected_wheel_array_names_topic_field_and_rule(values, needle):
     message = str(check_wheel_speed(values, 50.0))
-    assert message.startswith(f"rejected {WHEEL_TOPIC}: ") and needle in message
+    assert message.startswith(f'rejected {WHEEL_TOPIC}: ') and needle in message
 
 
 def test_a_steer_beyond_the_limit_names_the_limit():
     message = str(check_steer([0.0, 1.6, 0.0, 0.0], math.pi / 2))
-    assert message == (f"rejected {STEER_TOPIC}: data[1] (front_right) = 1.6 rad: "
-                       f"must be within +-1.5708 rad (chassis.steer_limit)")
+    assert message == (f'rejected {STEER_TOPIC}: data[1] (front_right) = 1.6 rad: '
+                       f'must be within +-1.5708 rad (chassis.steer_limit)')
 
 
 @given(vx=any_float, vy=any_float, wz=any_float, offset=offsets, bound=bounds,
@@ -101,21 +110,21 @@ def test_ordinary_twists_are_accepted(vx, vy, wz, offset):
 
 def test_a_huge_twist_names_the_twist_the_wheel_and_the_bound():
     message = str(map_twist(1e308, 0.0, 1e308, GEOMETRY, 0.0, 50.0))
-    assert message.startswith(f"rejected {TWIST_TOPIC}: (linear.x, linear.y, angular.z) = "
-                              f"(1e+308, 0, 1e+308) maps to front_left wheel speed = inf rad/s")
-    assert message.endswith("must be within +-50 rad/s (motors.max_wheel_speed)")
+    assert message.startswith(f'rejected {TWIST_TOPIC}: (linear.x, linear.y, angular.z) = '
+                              f'(1e+308, 0, 1e+308) maps to front_left wheel speed = inf rad/s')
+    assert message.endswith('must be within +-50 rad/s (motors.max_wheel_speed)')
 
 
 def test_a_nan_twist_names_its_field():
     assert str(map_twist(0.0, 0.0, math.nan, GEOMETRY, 0.0, 50.0)) == (
-        f"rejected {TWIST_TOPIC}: angular.z = nan rad/s: must be finite, not NaN or inf")
+        f'rejected {TWIST_TOPIC}: angular.z = nan rad/s: must be finite, not NaN or inf')
 
 
 offers = st.one_of(
-    st.tuples(st.just("steer"), float_lists),
-    st.tuples(st.just("wheels"), float_lists),
-    st.tuples(st.just("twist"), st.tuples(any_float, any_float, any_float)),
-    st.tuples(st.just("take"), st.none()))
+    st.tuples(st.just('steer'), float_lists),
+    st.tuples(st.just('wheels'), float_lists),
+    st.tuples(st.just('twist'), st.tuples(any_float, any_float, any_float)),
+    st.tuples(st.just('take'), st.none()))
 
 
 @settings(max_examples=200)
@@ -125,11 +134,11 @@ def test_the_gate_only_ever_hands_out_finite_commands_within_limits(sequence):
     now = 0.0
     for kind, payload in sequence:
         now += 0.001
-        if kind == "steer":
+        if kind == 'steer':
             gate.offer_steer(payload, now)
-        elif kind == "wheels":
+        elif kind == 'wheels':
             gate.offer_wheels(payload, now)
-        elif kind == "twist":
+        elif kind == 'twist':
             gate.offer_twist(*payload, now)
         command, report = gate.take(now)
         assert report is None or (isinstance(report, str) and report)
@@ -150,9 +159,9 @@ def test_a_run_of_rejections_of_one_kind_is_reported_once():
         assert command is None
         reports.append(report)
     assert [r for r in reports if r] == [
-        f"braking: {map_twist(1e308, 0.0, 1e308, GEOMETRY, 0.0, 50.0)}"]
+        f'braking: {map_twist(1e308, 0.0, 1e308, GEOMETRY, 0.0, 50.0)}']
     gate.offer_wheels([1e308] * 4, 0.2)  # another kind: reported
-    assert "motors.max_wheel_speed" in gate.take(0.2)[1]
+    assert 'motors.max_wheel_speed' in gate.take(0.2)[1]
 
 
 def test_live_limits_apply_to_the_next_command_and_are_validated():
@@ -161,6 +170,6 @@ def test_live_limits_apply_to_the_next_command_and_are_validated():
     gate.offer_steer([0.0] * 4, 0.0)
     gate.offer_wheels([7.0] * 4, 0.0)
     command, report = gate.take(0.0)
-    assert command is None and "data[0] (front_left) = 7.0 rad/s: must be within +-5" in report
-    with pytest.raises(ValueError, match="motors.max_wheel_speed = nan rad/s"):
+    assert command is None and 'data[0] (front_left) = 7.0 rad/s: must be within +-5' in report
+    with pytest.raises(ValueError, match='motors.max_wheel_speed = nan rad/s'):
         gate.configure(0.2, math.nan)

@@ -1,11 +1,13 @@
-"""Every long command: outputs checked before the work, shipped files never overwritten
-unless asked, Ctrl-C and SIGTERM end it at once with exit 130 and no traceback."""
+"""
+Every long command: outputs checked before the work, shipped files never overwritten
+unless asked, Ctrl-C and SIGTERM end it at once with exit 130 and no traceback.
+"""
 
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
@@ -18,34 +20,34 @@ def run(*args, timeout=60):
                           timeout=timeout, cwd=ROOT)
 
 
-@pytest.mark.parametrize("command, args", [
-    ("nfmr-compare", ["--out", "/proc/nfmr-report"]),
-    ("nfmr-montecarlo", ["--n", "2", "--plots", "/proc/nfmr-plots"]),
-    ("nfmr-tune", ["--candidates", "2", "--out", "/proc/nfmr/tuned.yaml"]),
-    ("nfmr-tune-baselines", ["--budget", "1", "--out", "/proc/nfmr/comparison.yaml"]),
+@pytest.mark.parametrize('command, args', [
+    ('nfmr-compare', ['--out', '/proc/nfmr-report']),
+    ('nfmr-montecarlo', ['--n', '2', '--plots', '/proc/nfmr-plots']),
+    ('nfmr-tune', ['--candidates', '2', '--out', '/proc/nfmr/tuned.yaml']),
+    ('nfmr-tune-baselines', ['--budget', '1', '--out', '/proc/nfmr/comparison.yaml']),
 ])
 def test_an_unwritable_output_is_refused_before_any_work(command, args):
     start = time.monotonic()
     proc = run(command, *args)
-    assert proc.returncode == 2 and "not writable" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and 'not writable' in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
     assert time.monotonic() - start < 10.0  # nothing was computed
 
 
-@pytest.mark.parametrize("command, shipped", [("nfmr-tune", "config/tuned_outer.yaml"),
-                                              ("nfmr-tune-baselines", "config/comparison.yaml")])
+@pytest.mark.parametrize('command, shipped', [('nfmr-tune', 'config/tuned_outer.yaml'),
+                                              ('nfmr-tune-baselines', 'config/comparison.yaml')])
 def test_a_shipped_file_is_replaced_only_with_force(command, shipped):
     before = (ROOT / shipped).read_bytes()
-    proc = run(command, "--out", shipped)
-    assert proc.returncode == 2 and "shipped with nfmr" in proc.stderr
-    assert "--force" in proc.stderr
+    proc = run(command, '--out', shipped)
+    assert proc.returncode == 2 and 'shipped with nfmr' in proc.stderr
+    assert '--force' in proc.stderr
     assert (ROOT / shipped).read_bytes() == before
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-@pytest.mark.parametrize("command, args", [
-    ("nfmr-montecarlo", ["--plant", "pybullet", "--n", "8", "--duration", "60", "--jobs", "2"]),
-    ("nfmr-compare", ["--plant", "pybullet", "--out", "{tmp}/report", "--jobs", "2"]),
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize('command, args', [
+    ('nfmr-montecarlo', ['--plant', 'pybullet', '--n', '8', '--duration', '60', '--jobs', '2']),
+    ('nfmr-compare', ['--plant', 'pybullet', '--out', '{tmp}/report', '--jobs', '2']),
 ])
 def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, sig):
     proc = subprocess.Popen([str(BIN / command), *(a.format(tmp=tmp_path) for a in args)],
@@ -55,19 +57,19 @@ def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, s
     proc.send_signal(sig)
     _, stderr = proc.communicate(timeout=30)
     assert time.monotonic() - sent < 5.0
-    assert proc.returncode == 130 and "interrupted" in stderr
-    assert "Traceback" not in stderr
-    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
-    assert children.stdout.strip() == ""  # no worker left behind
+    assert proc.returncode == 130 and 'interrupted' in stderr
+    assert 'Traceback' not in stderr
+    children = subprocess.run(['pgrep', '-P', str(proc.pid)], capture_output=True, text=True)
+    assert children.stdout.strip() == ''  # no worker left behind
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["nfmr-montecarlo", "--n", "1000000000"], "--n 1000000000 starts"),
-    (["nfmr-montecarlo", "--n", "4", "--duration", "1e9"], "--duration 1e+09 s"),
-    (["nfmr-eval", "--duration", "1e9"], "--duration 1e+09 s"),
+@pytest.mark.parametrize('args, needle', [
+    (['nfmr-montecarlo', '--n', '1000000000'], '--n 1000000000 starts'),
+    (['nfmr-montecarlo', '--n', '4', '--duration', '1e9'], '--duration 1e+09 s'),
+    (['nfmr-eval', '--duration', '1e9'], '--duration 1e+09 s'),
 ])
 def test_a_request_too_large_for_memory_is_refused_at_once(args, needle):
     start = time.monotonic()
     proc = run(*args)
-    assert proc.returncode == 2 and needle in proc.stderr and "GiB of memory" in proc.stderr
+    assert proc.returncode == 2 and needle in proc.stderr and 'GiB of memory' in proc.stderr
     assert time.monotonic() - start < 10.0

@@ -2,33 +2,34 @@
 
 import json
 
+from nfmr_dlsmc.analysis import baseline_tuning
+from nfmr_dlsmc.analysis.comparison_report import Finding, paper_findings
+from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, CASE2, run_scenario
+from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES, load_gain_blocks
+from nfmr_dlsmc.cli import compare as compare_cli
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
-from nfmr_dlsmc import baseline_tuning, compare_cli
-from nfmr_dlsmc.comparison_report import Finding, paper_findings
-from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, CASE2, run_scenario
-from nfmr_dlsmc.controllers import CONTROLLER_NAMES, build_controller, load_gain_blocks
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.params import controller_params, load_params_file
-from nfmr_dlsmc.validation import ParameterError
-
 #: The hold figures every run of results.json carries.
-HOLD_KEYS = ("t_conv_1cm", "hold_distance_p99", "hold_theta_e_p99", "hold_omega_tv",
-             "hold_omega_saturated", "hold_steer_rate_max", "hold_steer_joint_rate_max")
+HOLD_KEYS = ('t_conv_1cm', 'hold_distance_p99', 'hold_theta_e_p99', 'hold_omega_tv',
+             'hold_omega_saturated', 'hold_steer_rate_max', 'hold_steer_joint_rate_max')
 
 
-@pytest.mark.parametrize("name, block, parameter, text", [
-    ("pid", {"kp": -1.0}, "pid.kp", "must be >= 0"),
-    ("pid", {"kq": 1.0}, "pid.kq", "unknown gain"),
-    ("dl_crsmc", {"outer": {"rate": 0.0}}, "dl_crsmc.outer.rate", "must be > 0"),
-    ("dntsmc", {"inner": {"p": 34}}, "dntsmc.inner.p", "odd"),
-    ("btsmc_ntsmc", {"middle": {}}, "btsmc_ntsmc.middle", "unknown section"),
-    ("dlsmc", {"outer": {"C1": "fast"}}, "dlsmc.outer.C1", "real number"),
-    ("dlsmc_robot", {"thetadot_source": "guess"}, "dlsmc_robot.thetadot_source", "one of"),
-    ("dlsmc_robot", {"inner": {"eta_max": -1.0}}, "dlsmc_robot.inner.eta_max", ">= 0"),
-    ("dlsmc", {"rate": 1.0}, "dlsmc.rate", "known: inner, outer, thetadot_filter"),
-    ("lqr", None, "controller", "must be one of"),
+@pytest.mark.parametrize('name, block, parameter, text', [
+    ('pid', {'kp': -1.0}, 'pid.kp', 'must be >= 0'),
+    ('pid', {'kq': 1.0}, 'pid.kq', 'unknown gain'),
+    ('dl_crsmc', {'outer': {'rate': 0.0}}, 'dl_crsmc.outer.rate', 'must be > 0'),
+    ('dntsmc', {'inner': {'p': 34}}, 'dntsmc.inner.p', 'odd'),
+    ('btsmc_ntsmc', {'middle': {}}, 'btsmc_ntsmc.middle', 'unknown section'),
+    ('dlsmc', {'outer': {'C1': 'fast'}}, 'dlsmc.outer.C1', 'real number'),
+    ('dlsmc_robot', {'thetadot_source': 'guess'}, 'dlsmc_robot.thetadot_source', 'one of'),
+    ('dlsmc_robot', {'inner': {'eta_max': -1.0}}, 'dlsmc_robot.inner.eta_max', '>= 0'),
+    ('dlsmc', {'rate': 1.0}, 'dlsmc.rate', 'known: inner, outer, thetadot_filter'),
+    ('lqr', None, 'controller', 'must be one of'),
 ])
 def test_bad_gains_name_the_parameter(name, block, parameter, text):
     with pytest.raises(ParameterError) as info:
@@ -38,236 +39,237 @@ def test_bad_gains_name_the_parameter(name, block, parameter, text):
 
 
 def test_gains_file_errors(tmp_path):
-    with pytest.raises(ParameterError, match="cannot be read"):
-        load_gain_blocks(tmp_path / "missing.yaml")
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("controllers:\n  pid: [\n")
-    with pytest.raises(ParameterError, match="not valid YAML"):
+    with pytest.raises(ParameterError, match='cannot be read'):
+        load_gain_blocks(tmp_path / 'missing.yaml')
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('controllers:\n  pid: [\n')
+    with pytest.raises(ParameterError, match='not valid YAML'):
         load_gain_blocks(bad)
-    unknown = tmp_path / "unknown.yaml"
-    unknown.write_text("controllers:\n  mpc: {}\n")
-    with pytest.raises(ParameterError, match="must be one of"):
+    unknown = tmp_path / 'unknown.yaml'
+    unknown.write_text('controllers:\n  mpc: {}\n')
+    with pytest.raises(ParameterError, match='must be one of'):
         load_gain_blocks(unknown)
 
 
 def test_dlsmc_built_by_name_is_the_paper_controller():
-    result = run_scenario("dlsmc", {}, CASE1_LONGITUDINAL)
+    result = run_scenario('dlsmc', {}, CASE1_LONGITUDINAL)
     assert simulation_metrics(result).iae == pytest.approx(13.5757, rel=0.02)
 
 
 def test_dlsmc_robot_is_the_robot_profile_of_robot_case1():
-    blocks = load_gain_blocks("config/comparison.yaml")
-    robot = build_controller("dlsmc_robot", blocks["dlsmc_robot"]).config
-    profile = controller_params(load_params_file("config/robot_case1.yaml")).dlsmc
+    blocks = load_gain_blocks('config/comparison.yaml')
+    robot = build_controller('dlsmc_robot', blocks['dlsmc_robot']).config
+    profile = controller_params(load_params_file('config/robot_case1.yaml')).dlsmc
     assert robot == profile
     assert not robot.is_paper_law
-    assert build_controller("dlsmc", blocks["dlsmc"]).config.is_paper_law
+    assert build_controller('dlsmc', blocks['dlsmc']).config.is_paper_law
 
 
 def test_the_robot_profile_is_not_tuned_and_keeps_the_tuning_seeds():
     # nfmr-tune-baselines seeds each controller by its index in the registry: the robot
     # profile comes last so that the shipped tuning stays reproducible.
-    assert "dlsmc_robot" not in baseline_tuning.TUNED
-    assert CONTROLLER_NAMES[-1] == "dlsmc_robot"
+    assert 'dlsmc_robot' not in baseline_tuning.TUNED
+    assert CONTROLLER_NAMES[-1] == 'dlsmc_robot'
     assert CONTROLLER_NAMES[:12] == (
-        "dlsmc", "pid", "csmc", "dsmc", "dl_crsmc", "dntsmc", "btsmc_ntsmc", "btintsmc_crsmc",
-        "btintsmc_ntsmc", "pure_pursuit", "stanley", "kanayama")
+        'dlsmc', 'pid', 'csmc', 'dsmc', 'dl_crsmc', 'dntsmc', 'btsmc_ntsmc', 'btintsmc_crsmc',
+        'btintsmc_ntsmc', 'pure_pursuit', 'stanley', 'kanayama')
 
 
 def test_tuning_candidates_are_seeded_within_range_and_start_at_the_defaults():
-    first = baseline_tuning.candidates("dntsmc", 20, seed=3)
-    again = baseline_tuning.candidates("dntsmc", 20, seed=3)
-    other = baseline_tuning.candidates("dntsmc", 20, seed=4)
+    first = baseline_tuning.candidates('dntsmc', 20, seed=3)
+    again = baseline_tuning.candidates('dntsmc', 20, seed=3)
+    other = baseline_tuning.candidates('dntsmc', 20, seed=4)
     assert first == again and first != other
     assert first[0] == {} and len(first) == 20
     for block in first[1:]:
-        for (section, gain), (low, high) in baseline_tuning.SEARCH_SPACES["dntsmc"].items():
+        for (section, gain), (low, high) in baseline_tuning.SEARCH_SPACES['dntsmc'].items():
             assert low <= block[section][gain] <= high
-        build_controller("dntsmc", block)  # every candidate is a valid gain set
+        build_controller('dntsmc', block)  # every candidate is a valid gain set
 
 
 def test_tuning_score_is_the_table_criterion():
-    score = baseline_tuning.score("btintsmc_crsmc", {})
-    result = run_scenario("btintsmc_crsmc", {}, CASE2)
-    assert score == pytest.approx(np.sum(np.abs(result.telemetry["theta_e"])) * 0.001)
+    score = baseline_tuning.score('btintsmc_crsmc', {})
+    result = run_scenario('btintsmc_crsmc', {}, CASE2)
+    assert score == pytest.approx(np.sum(np.abs(result.telemetry['theta_e'])) * 0.001)
 
 
 def test_shipped_gains_record_their_search():
     import yaml
-    from nfmr_dlsmc.controllers import default_gains_file
 
-    document = yaml.safe_load(default_gains_file().read_text())
-    assert set(document["controllers"]) == set(CONTROLLER_NAMES)
-    assert document["controllers"]["dlsmc"] == {}
-    record = document["tuning"]["results"]
+    document = yaml.safe_load(shipped_config('comparison.yaml').read_text())
+    assert set(document['controllers']) == set(CONTROLLER_NAMES)
+    assert document['controllers']['dlsmc'] == {}
+    record = document['tuning']['results']
     assert set(record) == set(baseline_tuning.TUNED)
     for name in baseline_tuning.TUNED:
-        best = record[name]["best"]
-        assert record[name]["defaults"] == "diverged" or best <= record[name]["defaults"]
+        best = record[name]['best']
+        assert record[name]['defaults'] == 'diverged' or best <= record[name]['defaults']
 
 
 def _document(case1_iae: dict, case1_std: dict) -> dict:
-    smooth = {"t_conv": 7.0, "final_distance": 0.0, "max_abs_omega_raw": 1.0,
-              "omega_raw_over_limit": 0.0, "omega_raw_tv": 0.1}
-    runs = {n: smooth | {"iae": case1_iae[n], "std": case1_std[n]} for n in case1_iae}
-    return {"case1": {CASE1_LONGITUDINAL.start_key: runs}}
+    smooth = {'t_conv': 7.0, 'final_distance': 0.0, 'max_abs_omega_raw': 1.0,
+              'omega_raw_over_limit': 0.0, 'omega_raw_tv': 0.1}
+    runs = {n: smooth | {'iae': case1_iae[n], 'std': case1_std[n]} for n in case1_iae}
+    return {'case1': {CASE1_LONGITUDINAL.start_key: runs}}
 
 
 def test_findings_follow_the_numbers():
-    iae = {"pid": 30.0, "csmc": 20.0, "dl_crsmc": 15.0, "dntsmc": 14.0, "btsmc_ntsmc": 16.0,
-           "dlsmc": 13.0}
-    std = dict.fromkeys(iae, 0.7) | {"dlsmc": 0.5}
+    iae = {'pid': 30.0, 'csmc': 20.0, 'dl_crsmc': 15.0, 'dntsmc': 14.0, 'btsmc_ntsmc': 16.0,
+           'dlsmc': 13.0}
+    std = dict.fromkeys(iae, 0.7) | {'dlsmc': 0.5}
     lowest, csmc = paper_findings(_document(iae, std))
     assert isinstance(lowest, Finding) and lowest.reproduced is True
     assert csmc.reproduced is False  # a smooth omega inside its limit
-    lowest, _ = paper_findings(_document(iae | {"dntsmc": 12.0}, std))
-    assert lowest.reproduced is False and "DNTSMC 12.000" in lowest.evidence
+    lowest, _ = paper_findings(_document(iae | {'dntsmc': 12.0}, std))
+    assert lowest.reproduced is False and 'DNTSMC 12.000' in lowest.evidence
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("report")
-    assert compare_cli.main(["--out", str(out), "--jobs", "2"]) == 0
+    out = tmp_path_factory.mktemp('report')
+    assert compare_cli.main(['--out', str(out), '--jobs', '2']) == 0
     return out
 
 
 def test_report_results_are_keyed_by_case_start_and_controller(report):
-    document = json.loads((report / "results.json").read_text())
-    assert document["plant"] == "kinematic"
-    assert set(document) == {"plant", "case1", "case2", "c_ratio"}
-    assert set(document["case1"]) == {"1,4,0", "4,1,0"}
-    assert set(document["case2"]) == {"1,1,0.523599"}
-    for case, starts in (("case1", ("1,4,0", "4,1,0")), ("case2", ("1,1,0.523599",))):
+    document = json.loads((report / 'results.json').read_text())
+    assert document['plant'] == 'kinematic'
+    assert set(document) == {'plant', 'case1', 'case2', 'c_ratio'}
+    assert set(document['case1']) == {'1,4,0', '4,1,0'}
+    assert set(document['case2']) == {'1,1,0.523599'}
+    for case, starts in (('case1', ('1,4,0', '4,1,0')), ('case2', ('1,1,0.523599',))):
         for start in starts:
             assert set(document[case][start]) == set(CONTROLLER_NAMES)
-    dlsmc = document["case1"]["1,4,0"]["dlsmc"]
-    assert dlsmc["iae"] == pytest.approx(13.5757, rel=0.02)
-    assert dlsmc["t_conv"] == pytest.approx(7.1, rel=0.02)
+    dlsmc = document['case1']['1,4,0']['dlsmc']
+    assert dlsmc['iae'] == pytest.approx(13.5757, rel=0.02)
+    assert dlsmc['t_conv'] == pytest.approx(7.1, rel=0.02)
     # Each number is that of an independent run with the shipped gains.
-    blocks = load_gain_blocks("config/comparison.yaml")
-    result = run_scenario("kanayama", blocks["kanayama"], CASE1_LONGITUDINAL)
-    assert document["case1"]["1,4,0"]["kanayama"]["iae"] == pytest.approx(
+    blocks = load_gain_blocks('config/comparison.yaml')
+    result = run_scenario('kanayama', blocks['kanayama'], CASE1_LONGITUDINAL)
+    assert document['case1']['1,4,0']['kanayama']['iae'] == pytest.approx(
         simulation_metrics(result).iae, rel=1e-12)
 
 
 def test_report_tables_print_the_results(report):
-    document = json.loads((report / "results.json").read_text())
-    text = (report / "report.md").read_text()
-    for name in ("pid", "dlsmc", "dntsmc"):
+    document = json.loads((report / 'results.json').read_text())
+    text = (report / 'report.md').read_text()
+    for name in ('pid', 'dlsmc', 'dntsmc'):
         assert f"{document['case1']['1,4,0'][name]['iae']:.4f}" in text
-    assert "13.5757 (" in text  # the paper's DLSMC IAE beside ours
+    assert '13.5757 (' in text  # the paper's DLSMC IAE beside ours
     assert f"{document['case2']['1,1,0.523599']['dlsmc']['theta_e_iae']:.4f}" in text
     assert "## The paper's findings, checked" in text
-    assert text.count("reproduced**") == 4
+    assert text.count('reproduced**') == 4
 
 
 def test_kinematic_report_has_the_hold_tables_and_the_robot_profile(report):
-    document = json.loads((report / "results.json").read_text())
-    text = (report / "report.md").read_text()
-    robot = document["case1"]["1,4,0"]["dlsmc_robot"]
+    document = json.loads((report / 'results.json').read_text())
+    text = (report / 'report.md').read_text()
+    robot = document['case1']['1,4,0']['dlsmc_robot']
     assert set(HOLD_KEYS) <= set(robot)
     # The kinematic model has no steer joints, but the mapping's steer commands are rated.
-    assert robot["hold_steer_joint_rate_max"] is None
-    assert 0.0 < robot["hold_steer_rate_max"] < 1.0
-    assert robot["hold_omega_saturated"] == 0.0 and robot["hold_distance_p99"] < 1e-3
-    assert "## Holding the path (from t = 15 s on)" in text
+    assert robot['hold_steer_joint_rate_max'] is None
+    assert 0.0 < robot['hold_steer_rate_max'] < 1.0
+    assert robot['hold_omega_saturated'] == 0.0 and robot['hold_distance_p99'] < 1e-3
+    assert '## Holding the path (from t = 15 s on)' in text
     assert f"| DLSMC, robot profile | {robot['t_conv_1cm']:.2f} |" in text
-    table3 = text[text.index("## Table 3"):text.index("## Table 4")]
-    assert "DLSMC, robot profile" in table3.splitlines()[2]
-    assert "## Which laws hold up on the robot" not in text
+    table3 = text[text.index('## Table 3'):text.index('## Table 4')]
+    assert 'DLSMC, robot profile' in table3.splitlines()[2]
+    assert '## Which laws hold up on the robot' not in text
 
 
 def test_report_figures_are_pngs_and_referenced(report):
-    text = (report / "report.md").read_text()
-    pngs = sorted(report.glob("fig*.png"))
-    assert [p.name[:5] for p in pngs] == [f"fig{n:02d}" for n in range(7, 18)]
+    text = (report / 'report.md').read_text()
+    pngs = sorted(report.glob('fig*.png'))
+    assert [p.name[:5] for p in pngs] == [f'fig{n:02d}' for n in range(7, 18)]
     for png in pngs:
-        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
         assert png.stat().st_size > 20_000
-        assert f"]({png.name})" in text
+        assert f']({png.name})' in text
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def pybullet_report(tmp_path_factory):
-    """The paper's DLSMC and the robot profile on the chassis, every run cut to 20 s (the
-    hold window is then 15-20 s)."""
-    out = tmp_path_factory.mktemp("report_pybullet")
-    assert compare_cli.main(["--plant", "pybullet", "--duration", "20", "--controllers",
-                             "dlsmc_robot", "--out", str(out), "--jobs", "2"]) == 0
+    """
+    The paper's DLSMC and the robot profile on the chassis, every run cut to 20 s (the
+    hold window is then 15-20 s).
+    """
+    out = tmp_path_factory.mktemp('report_pybullet')
+    assert compare_cli.main(['--plant', 'pybullet', '--duration', '20', '--controllers',
+                             'dlsmc_robot', '--out', str(out), '--jobs', '2']) == 0
     return out
 
 
 def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_report):
-    document = json.loads((pybullet_report / "results.json").read_text())
-    assert document["plant"] == "pybullet"
-    assert set(document) == {"plant", "case1", "case2"}  # no C1:C2 runs on the chassis
-    assert set(document["case1"]) == {"1,4,0", "4,1,0"}
-    assert set(document["case2"]) == {"1,1,0.523599"}
-    for starts in (document["case1"], document["case2"]):
+    document = json.loads((pybullet_report / 'results.json').read_text())
+    assert document['plant'] == 'pybullet'
+    assert set(document) == {'plant', 'case1', 'case2'}  # no C1:C2 runs on the chassis
+    assert set(document['case1']) == {'1,4,0', '4,1,0'}
+    assert set(document['case2']) == {'1,1,0.523599'}
+    for starts in (document['case1'], document['case2']):
         for runs in starts.values():
-            assert set(runs) == {"dlsmc", "dlsmc_robot"}
+            assert set(runs) == {'dlsmc', 'dlsmc_robot'}
             for figures in runs.values():
                 assert set(HOLD_KEYS) <= set(figures)
-                assert figures["hold_steer_joint_rate_max"] is not None  # measured joints
+                assert figures['hold_steer_joint_rate_max'] is not None  # measured joints
 
 
 def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybullet_report):
-    document = json.loads((pybullet_report / "results.json").read_text())
-    for case, start in (("case1", "1,4,0"), ("case1", "4,1,0"), ("case2", "1,1,0.523599")):
-        robot = document[case][start]["dlsmc_robot"]
-        paper = document[case][start]["dlsmc"]
-        assert robot["hold_omega_saturated"] == 0.0
-        assert robot["hold_distance_p99"] < 0.01 and robot["t_conv_1cm"] < 15.0
-        assert paper["hold_omega_saturated"] > 0.5
-        assert paper["hold_distance_p99"] > 0.02
-    case1 = document["case1"]["1,4,0"]
-    assert case1["dlsmc_robot"]["hold_steer_joint_rate_max"] < 1.0  # rad/s: steering still
-    assert case1["dlsmc"]["hold_steer_joint_rate_max"] > 15.0  # at the 20 rad/s cap
+    document = json.loads((pybullet_report / 'results.json').read_text())
+    for case, start in (('case1', '1,4,0'), ('case1', '4,1,0'), ('case2', '1,1,0.523599')):
+        robot = document[case][start]['dlsmc_robot']
+        paper = document[case][start]['dlsmc']
+        assert robot['hold_omega_saturated'] == 0.0
+        assert robot['hold_distance_p99'] < 0.01 and robot['t_conv_1cm'] < 15.0
+        assert paper['hold_omega_saturated'] > 0.5
+        assert paper['hold_distance_p99'] > 0.02
+    case1 = document['case1']['1,4,0']
+    assert case1['dlsmc_robot']['hold_steer_joint_rate_max'] < 1.0  # rad/s: steering still
+    assert case1['dlsmc']['hold_steer_joint_rate_max'] > 15.0  # at the 20 rad/s cap
 
 
 def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):
-    document = json.loads((pybullet_report / "results.json").read_text())
-    text = (pybullet_report / "report.md").read_text()
-    assert "| IAE (paper, kinematic model) | " in text
-    assert "13.5757 (" not in text  # no percentage against another plant's value
-    assert "(paper, kinematic 7.1)" in text
-    assert "C1:C2 runs of Fig. 13 (a kinematic-model figure) are left out" in text
-    assert "fig13" not in text
-    section = text[text.index("## Which laws hold up on the robot and why"):]
-    holds = section[section.index("### Holds the path"):]
-    chatter = section[section.index("### Chatter"):section.index("### Holds the path")]
-    assert "- DLSMC, robot profile:" in holds
-    assert "- DLSMC (BTINTSMC + ABFSMC):" in chatter
-    robot = document["case1"]["1,4,0"]["dlsmc_robot"]
+    document = json.loads((pybullet_report / 'results.json').read_text())
+    text = (pybullet_report / 'report.md').read_text()
+    assert '| IAE (paper, kinematic model) | ' in text
+    assert '13.5757 (' not in text  # no percentage against another plant's value
+    assert '(paper, kinematic 7.1)' in text
+    assert 'C1:C2 runs of Fig. 13 (a kinematic-model figure) are left out' in text
+    assert 'fig13' not in text
+    section = text[text.index('## Which laws hold up on the robot and why'):]
+    holds = section[section.index('### Holds the path'):]
+    chatter = section[section.index('### Chatter'):section.index('### Holds the path')]
+    assert '- DLSMC, robot profile:' in holds
+    assert '- DLSMC (BTINTSMC + ABFSMC):' in chatter
+    robot = document['case1']['1,4,0']['dlsmc_robot']
     assert f"| DLSMC, robot profile | {robot['t_conv_1cm']:.2f} |" in text
 
 
 def test_compare_rejects_a_bad_duration_in_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as info:
-        compare_cli.main(["--out", str(tmp_path / "r"), "--duration", "0"])
+        compare_cli.main(['--out', str(tmp_path / 'r'), '--duration', '0'])
     assert info.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--duration: must be a finite number > 0" in err
-    assert not (tmp_path / "r").exists()
+    assert err.count('\n') == 1 and '--duration: must be a finite number > 0' in err
+    assert not (tmp_path / 'r').exists()
 
 
 def test_compare_rejects_a_bad_gains_file(tmp_path, capsys):
-    bad = tmp_path / "gains.yaml"
-    bad.write_text("controllers:\n  pid: {kp: -2}\n")
+    bad = tmp_path / 'gains.yaml'
+    bad.write_text('controllers:\n  pid: {kp: -2}\n')
     with pytest.raises(SystemExit) as info:
-        compare_cli.main(["--out", str(tmp_path / "r"), "--gains", str(bad)])
+        compare_cli.main(['--out', str(tmp_path / 'r'), '--gains', str(bad)])
     assert info.value.code == 2
-    assert "pid.kp = -2" in capsys.readouterr().err
-    assert not (tmp_path / "r").exists()
+    assert 'pid.kp = -2' in capsys.readouterr().err
+    assert not (tmp_path / 'r').exists()
 
 
 def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
-    path = tmp_path / "comparison.yaml"
-    path.write_text(compare_cli.default_gains_file().read_text())
+    path = tmp_path / 'comparison.yaml'
+    path.write_text(compare_cli.shipped_config('comparison.yaml').read_text())
     shipped = load_gain_blocks(path)
-    tuned_pid = {"v_c": 0.5, "kp": 1.0, "ki": 0.1, "kd": 0.01, "k_theta": 0.2}
-    baseline_tuning.write_gains_file(path, {"pid": (tuned_pid, 1.0, 2.0)}, 3, 0, "nfmr-tune-baselines")
+    tuned_pid = {'v_c': 0.5, 'kp': 1.0, 'ki': 0.1, 'kd': 0.01, 'k_theta': 0.2}
+    baseline_tuning.write_gains_file(path, {'pid': (tuned_pid, 1.0, 2.0)}, 3, 0, 'nfmr-tune-baselines')
     written = load_gain_blocks(path)
-    assert written["dlsmc_robot"] == shipped["dlsmc_robot"]
-    assert written["pid"] == tuned_pid and written["dlsmc"] == {}
-    assert "csmc" not in written  # tuned blocks come only from this search
+    assert written['dlsmc_robot'] == shipped['dlsmc_robot']
+    assert written['pid'] == tuned_pid and written['dlsmc'] == {}
+    assert 'csmc' not in written  # tuned blocks come only from this search

@@ -1,27 +1,45 @@
-"""The comparison controllers against hand-computed law values, their saturation, and
-their convergence from a benign start."""
+"""
+The comparison controllers against hand-computed law values, their saturation, and
+their convergence from a benign start.
+"""
 
 import math
 
+from nfmr_dlsmc.baselines.alternative_loops import (
+    BtsmcOuterLoop,
+    CrsmcInnerLoop,
+    CrsmcOuterLoop,
+    NtsmcInnerLoop,
+    NtsmcOuterLoop,
+)
+from nfmr_dlsmc.baselines.gains import (
+    BtsmcOuterGains,
+    CrsmcInnerGains,
+    CrsmcOuterGains,
+    CsmcGains,
+    DsmcGains,
+    KanayamaGains,
+    NtsmcInnerGains,
+    NtsmcOuterGains,
+    PidGains,
+    PurePursuitGains,
+    StanleyGains,
+)
+from nfmr_dlsmc.baselines.geometric_trackers import (
+    KanayamaController,
+    PurePursuitController,
+    StanleyController,
+)
+from nfmr_dlsmc.baselines.path_frame import robot_frame_errors
+from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES, load_gain_blocks
+from nfmr_dlsmc.baselines.single_loop import CsmcController, DsmcController, PidController
+from nfmr_dlsmc.core.gains import InputLimits
+from nfmr_dlsmc.core.sliding_functions import saturated_sign
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.alternative_loops import (BtsmcOuterLoop, CrsmcInnerLoop, CrsmcOuterLoop,
-                                          NtsmcInnerLoop, NtsmcOuterLoop)
-from nfmr_dlsmc.baseline_gains import (BtsmcOuterGains, CrsmcInnerGains, CrsmcOuterGains,
-                                       CsmcGains, DsmcGains, KanayamaGains, NtsmcInnerGains,
-                                       NtsmcOuterGains, PidGains, PurePursuitGains,
-                                       StanleyGains)
-from nfmr_dlsmc.controllers import (CONTROLLER_NAMES, build_controller, default_gains_file,
-                                    load_gain_blocks)
-from nfmr_dlsmc.gains import InputLimits
-from nfmr_dlsmc.geometric_trackers import (KanayamaController, PurePursuitController,
-                                           StanleyController)
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.path_frame import robot_frame_errors
-from nfmr_dlsmc.single_loop import CsmcController, DsmcController, PidController
-from nfmr_dlsmc.sliding_functions import saturated_sign
-from nfmr_dlsmc.trajectories import make_trajectory
 
 DT = 0.001
 WIDE = InputLimits(v_min=1e-6, v_max=1e6, omega_max=1e6)  # saturation out of the way
@@ -137,29 +155,29 @@ def test_btsmc_outer_has_a_linear_reaching_law():
     assert u_x == pytest.approx(0.5 - 1.5 * s_x - 0.6)
 
 
-@pytest.mark.parametrize("name", CONTROLLER_NAMES)
+@pytest.mark.parametrize('name', CONTROLLER_NAMES)
 def test_inputs_respect_the_limits(name):
     limits = InputLimits(v_min=0.2, v_max=1.0, omega_max=0.8)
     controller = build_controller(name, None, limits, DT)
-    result = simulate(controller, make_trajectory("sine"), (1.0, 4.0, 0.0), 15.0, DT)
+    result = simulate(controller, make_trajectory('sine'), (1.0, 4.0, 0.0), 15.0, DT)
     assert np.all((result.v >= 0.2) & (result.v <= 1.0))
     assert np.all(np.abs(result.omega) <= 0.8)
-    raw_v, raw_w = result.telemetry["v_raw"], result.telemetry["omega_raw"]
+    raw_v, raw_w = result.telemetry['v_raw'], result.telemetry['omega_raw']
     clipped = (raw_v < 0.2) | (raw_v > 1.0)
-    assert np.array_equal(result.telemetry["v_saturated"].astype(bool), clipped)
+    assert np.array_equal(result.telemetry['v_saturated'].astype(bool), clipped)
     np.testing.assert_allclose(result.omega, np.clip(raw_w, -0.8, 0.8))
 
 
 #: Benign start near the sine's start; where a method can only hold a band (pure pursuit
 #: cutting the curve, the stalling DSMC) that band is the bound.
-BENIGN_BOUND = {"pure_pursuit": 0.02, "dsmc": 0.5}
+BENIGN_BOUND = {'pure_pursuit': 0.02, 'dsmc': 0.5}
 
 
-@pytest.mark.parametrize("name", [n for n in CONTROLLER_NAMES if n != "pid"])
+@pytest.mark.parametrize('name', [n for n in CONTROLLER_NAMES if n != 'pid'])
 def test_converges_from_a_benign_start_with_the_shipped_gains(name):
-    blocks = load_gain_blocks(default_gains_file())
+    blocks = load_gain_blocks(shipped_config('comparison.yaml'))
     controller = build_controller(name, blocks.get(name), dt=DT)
-    result = simulate(controller, make_trajectory("sine"), (0.2, 0.3, 0.3), 40.0, DT)
+    result = simulate(controller, make_trajectory('sine'), (0.2, 0.3, 0.3), 40.0, DT)
     distance = result.distance_error
     late = distance[result.t >= 30.0]
     assert np.all(np.isfinite(distance))
@@ -168,19 +186,19 @@ def test_converges_from_a_benign_start_with_the_shipped_gains(name):
 
 
 def test_single_loop_telemetry_names_match_values():
-    controller = build_controller("kanayama")
+    controller = build_controller('kanayama')
     controller.step(0.0, 0.0, 0.0, 1.0, 0.5, 1.0, 0.0)
     values = dict(zip(controller.TELEMETRY_FIELDS, controller.telemetry()))
-    assert values["x_e"] == -1.0 and values["y_e"] == -0.5
-    assert math.isnan(values["theta_d"]) and math.isnan(values["theta_e"])
+    assert values['x_e'] == -1.0 and values['y_e'] == -0.5
+    assert math.isnan(values['theta_d']) and math.isnan(values['theta_e'])
 
 
 def test_pid_converges_onto_a_line_at_its_own_speed():
     # Constant speed and no feed-forward: the PID's benign case is a straight reference
     # driven at v_c, started 0.3 m beside it.
-    gains = load_gain_blocks(default_gains_file())["pid"] | {"v_c": 0.5}
-    controller = build_controller("pid", gains, dt=DT)
-    line = make_trajectory("line")
+    gains = load_gain_blocks(shipped_config('comparison.yaml'))['pid'] | {'v_c': 0.5}
+    controller = build_controller('pid', gains, dt=DT)
+    line = make_trajectory('line')
     start = (-0.3 * math.sin(line.heading), 0.3 * math.cos(line.heading), line.heading)
     result = simulate(controller, line, start, 60.0, DT)
     x_e = result.state[:, 0] - result.reference[:, 0]

@@ -2,12 +2,11 @@
 
 import math
 
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop, BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
 import pytest
-
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
-from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
-from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
 
 DT = 0.001
 R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
@@ -66,7 +65,7 @@ def test_inner_loop_barrier_phase_value():
     assert w == pytest.approx(0.3 - 0.008 ** R1 - eta)
 
 
-@pytest.mark.parametrize("s_out", [0.01, 0.0100001, 0.05, -0.01, -0.3])
+@pytest.mark.parametrize('s_out', [0.01, 0.0100001, 0.05, -0.01, -0.3])
 def test_barrier_fallback_never_divides_by_zero_nor_flips_sign(s_out):
     loop = AbfsmcInnerLoop(InnerLoopGains())
     loop.step(0.3, 0.0, DT)
@@ -160,7 +159,7 @@ def test_thetadot_filter_is_a_first_order_low_pass():
 
 
 def test_adapted_rates_follow_the_initial_error_and_keep_their_norm():
-    from nfmr_dlsmc.gains import RATIO_FLOOR, adapted_rates
+    from nfmr_dlsmc.core.gains import adapted_rates, RATIO_FLOOR
 
     norm = math.hypot(0.6, 0.6)
     c1, c2 = adapted_rates(0.6, 0.6, 1.0, -4.0)

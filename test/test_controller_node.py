@@ -3,20 +3,19 @@
 import math
 import time
 
+from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.ros.controller_node import ControllerNode
 import numpy as np
 import pytest
 import rclpy
-from geometry_msgs.msg import Twist, TwistStamped
-from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from ros_helpers import new_context, Spinner, wait_for
 from std_msgs.msg import Float64MultiArray
-
-from nfmr_dlsmc.controller_node import ControllerNode
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
-from nfmr_dlsmc.validation import ParameterError
-from ros_helpers import Spinner, new_context, wait_for
 
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -25,23 +24,23 @@ class Peer(Node):
     """Plays the robot: publishes odometry, records the controller's outputs with times."""
 
     def __init__(self, context, twist_type=Twist):
-        super().__init__("peer", context=context)
+        super().__init__('peer', context=context)
         self.twists, self.steer, self.wheels, self.states = [], [], [], []
-        self.odom = self.create_publisher(Odometry, "odom", QOS)
+        self.odom = self.create_publisher(Odometry, 'odom', QOS)
         stamp = lambda store: (lambda m: store.append((time.monotonic(), m)))  # noqa: E731
         # One participant holds one type per topic: match the controller's cmd_vel type.
-        self.create_subscription(twist_type, "cmd_vel", stamp(self.twists), QOS)
-        self.create_subscription(Float64MultiArray, "steer_position_controller/commands",
+        self.create_subscription(twist_type, 'cmd_vel', stamp(self.twists), QOS)
+        self.create_subscription(Float64MultiArray, 'steer_position_controller/commands',
                                  stamp(self.steer), QOS)
-        self.create_subscription(Float64MultiArray, "wheel_velocity_controller/commands",
+        self.create_subscription(Float64MultiArray, 'wheel_velocity_controller/commands',
                                  stamp(self.wheels), QOS)
-        self.create_subscription(Float64MultiArray, "controller_state", stamp(self.states), QOS)
+        self.create_subscription(Float64MultiArray, 'controller_state', stamp(self.states), QOS)
 
     def send_odom(self, x, y, yaw, t):
         msg = Odometry()
         msg.header.stamp.sec = int(t)
         msg.header.stamp.nanosec = int(round((t - int(t)) * 1e9))
-        msg.header.frame_id = "odom"
+        msg.header.frame_id = 'odom'
         msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
         msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
         self.odom.publish(msg)
@@ -56,7 +55,7 @@ class ConsoleLog:
 
     def read(self) -> list:
         self.lines += [line for line in self.capfd.readouterr().err.splitlines()
-                       if "[controller]" in line]
+                       if '[controller]' in line]
         return self.lines
 
 
@@ -73,10 +72,10 @@ def setup():
     def make(**overrides):
         node = ControllerNode(context=context, parameter_overrides=[
             Parameter(k, value=v) for k, v in overrides.items()])
-        peer = Peer(context, TwistStamped if overrides.get("twist_stamped") else Twist)
+        peer = Peer(context, TwistStamped if overrides.get('twist_stamped') else Twist)
         spinner = Spinner(context, node, peer)
-        wait_for(lambda: peer.count_subscribers("odom") > 0 and
-                 node.count_subscribers("controller_state") > 0, what="discovery")
+        wait_for(lambda: peer.count_subscribers('odom') > 0 and
+                 node.count_subscribers('controller_state') > 0, what='discovery')
         time.sleep(0.3)
         made.update(node=node, peer=peer, spinner=spinner)
         node.start()
@@ -84,8 +83,8 @@ def setup():
 
     yield make
     if made:
-        made["node"].stop()
-        made["spinner"].close()
+        made['node'].stop()
+        made['spinner'].close()
     rclpy.try_shutdown(context=context)
 
 
@@ -94,7 +93,7 @@ def drive(peer, steps, start_t=0.0, pose=(1.0, 4.0, 0.0)):
     for k in range(steps):
         n = len(peer.states)
         peer.send_odom(*pose, start_t + k * 0.001)
-        wait_for(lambda: len(peer.states) > n, what="a controller reply")
+        wait_for(lambda: len(peer.states) > n, what='a controller reply')
 
 
 def test_one_command_per_odometry_matching_the_core(setup):
@@ -105,9 +104,9 @@ def test_one_command_per_odometry_matching_the_core(setup):
     # The first tick is the hand-computed DLSMC first step from (1, 4, 0) on the sine.
     twist = peer.twists[0][1]
     assert twist.linear.x == pytest.approx(math.hypot(-0.1, -0.35))
-    labels = peer.states[0][1].layout.dim[0].label.split(",")
+    labels = peer.states[0][1].layout.dim[0].label.split(',')
     state = dict(zip(labels, peer.states[-1][1].data))
-    assert state["t"] == pytest.approx(0.049)
+    assert state['t'] == pytest.approx(0.049)
     # Per-wheel outputs are the core mapping of the published (v, omega).
     for (_, tw), (_, st), (_, wh) in zip(peer.twists, peer.steer, peer.wheels):
         expected = wheel_commands(tw.linear.x, tw.angular.z, RobotGeometry(), SteerMode(1.0, 0.0))
@@ -126,19 +125,19 @@ def test_stale_odometry_stops_within_50_ms_and_recovery_resumes(setup, log):
     drive(peer, 20)
     last_odom = time.monotonic()
     wait_for(lambda: any(tw.linear.x == 0.0 for _, tw in peer.twists), timeout=2.0,
-             what="a stop")
+             what='a stop')
     stop_time = next(t for t, tw in peer.twists if tw.linear.x == 0.0)
     assert stop_time > last_odom + 0.1  # not before the timeout (the 50 ms bound is
     # measured on a controller process in test_faults, free of this process's load)
     stop_index = next(i for i, (_, w) in enumerate(peer.wheels) if not any(w.data))
     np.testing.assert_allclose(peer.steer[stop_index][1].data, peer.steer[stop_index - 1][1].data)
-    wait_for(lambda: any("odometry is" in m and "old" in m for m in log.read()), what="the log")
+    wait_for(lambda: any('odometry is' in m and 'old' in m for m in log.read()), what='the log')
     n = len(peer.twists)
     drive(peer, 5, start_t=1.0)
     wait_for(lambda: len(peer.twists) >= n + 5)
     assert peer.twists[-1][1].linear.x > 0.0
-    wait_for(lambda: any("resumed" in m for m in log.read()), what="resume log")
-    assert sum("old" in m for m in log.read()) == 1
+    wait_for(lambda: any('resumed' in m for m in log.read()), what='resume log')
+    assert sum('old' in m for m in log.read()) == 1
 
 
 def test_nan_odometry_stops_at_once(setup, log):
@@ -147,28 +146,28 @@ def test_nan_odometry_stops_at_once(setup, log):
     n = len(peer.twists)
     sent = time.monotonic()
     peer.send_odom(math.nan, 4.0, 0.0, 0.011)
-    wait_for(lambda: len(peer.twists) > n, what="a reply to NaN odometry")
+    wait_for(lambda: len(peer.twists) > n, what='a reply to NaN odometry')
     arrival, twist = peer.twists[n]
     assert twist.linear.x == 0.0 and twist.angular.z == 0.0
     assert arrival - sent < 0.05
-    wait_for(lambda: any("not finite" in m for m in log.read()), what="the log")
+    wait_for(lambda: any('not finite' in m for m in log.read()), what='the log')
 
 
 def test_live_gain_change_takes_effect_at_the_next_tick(setup):
     node, peer = setup()
     drive(peer, 5)
-    result = node.set_parameters([Parameter("limits.v_min", value=0.5)])[0]
+    result = node.set_parameters([Parameter('limits.v_min', value=0.5)])[0]
     assert result.successful
     drive(peer, 1, start_t=0.005)
     assert peer.twists[-1][1].linear.x == pytest.approx(0.5)
 
 
-@pytest.mark.parametrize("name, value, reason", [
-    ("inner.p1", 32, "positive odd integer"),
-    ("outer.q2", 35, "1 < outer.p2/outer.q2 < 2"),
-    ("limits.v_max", 0.1, "must be > limits.v_min"),
-    ("inner.eps", -0.01, "must be > 0"),
-    ("odom_timeout", 0.0, "must be > 0"),
+@pytest.mark.parametrize('name, value, reason', [
+    ('inner.p1', 32, 'positive odd integer'),
+    ('outer.q2', 35, '1 < outer.p2/outer.q2 < 2'),
+    ('limits.v_max', 0.1, 'must be > limits.v_min'),
+    ('inner.eps', -0.01, 'must be > 0'),
+    ('odom_timeout', 0.0, 'must be > 0'),
 ])
 def test_invalid_live_change_is_rejected_and_changes_nothing(setup, name, value, reason):
     node, peer = setup()
@@ -182,32 +181,32 @@ def test_invalid_live_change_is_rejected_and_changes_nothing(setup, name, value,
 
 def test_structure_parameters_are_read_only_and_all_are_described(setup):
     node, peer = setup()
-    result = node.set_parameters([Parameter("trajectory.name", value="circle")])[0]
+    result = node.set_parameters([Parameter('trajectory.name', value='circle')])[0]
     assert not result.successful
-    names = [n for n in node._parameters if n != "use_sim_time"]
+    names = [n for n in node._parameters if n != 'use_sim_time']
     described = node.describe_parameters(names)
     assert all(d.description for d in described)
-    assert next(d for d in described if d.name == "inner.eps").description.startswith(
-        "barrier half-width")
-    assert next(d for d in described if d.name == "steering.j1").read_only
+    assert next(d for d in described if d.name == 'inner.eps').description.startswith(
+        'barrier half-width')
+    assert next(d for d in described if d.name == 'steering.j1').read_only
 
 
 def test_twist_stamped_on_request(setup):
     node, peer = setup(twist_stamped=True)
     drive(peer, 3)
-    wait_for(lambda: len(peer.twists) == 3, what="stamped twists")
+    wait_for(lambda: len(peer.twists) == 3, what='stamped twists')
     first = peer.twists[0][1]
-    assert isinstance(first, TwistStamped) and first.header.frame_id == "base_link"
+    assert isinstance(first, TwistStamped) and first.header.frame_id == 'base_link'
     assert first.twist.linear.x == pytest.approx(math.hypot(-0.1, -0.35))
-@pytest.mark.parametrize("name, value, message", [
-    ("inner.p1", 32, "inner.p1 = 32: must be a positive odd integer"),
-    ("outer.p2", 17, "outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2"),
-    ("limits.omega_max", -1.0, "limits.omega_max = -1.0 rad/s: must be > 0"),
-    ("inner.eps", "small", "inner.eps = 'small': must be of type double"),
-    ("inner.eps", 4, "inner.eps = 4.0 rad: must be < pi"),  # an integer is a number
-    ("outer.gain", 1.0, "outer.gain = 1.0: unknown parameter"),
-    ("tick_source", "timer", "tick_source = 'timer': must be one of odom, clock"),
-    ("trajectory.name", "spiral", "trajectory.name = 'spiral'"),
+@pytest.mark.parametrize('name, value, message', [
+    ('inner.p1', 32, 'inner.p1 = 32: must be a positive odd integer'),
+    ('outer.p2', 17, 'outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2'),
+    ('limits.omega_max', -1.0, 'limits.omega_max = -1.0 rad/s: must be > 0'),
+    ('inner.eps', 'small', "inner.eps = 'small': must be of type double"),
+    ('inner.eps', 4, 'inner.eps = 4.0 rad: must be < pi'),  # an integer is a number
+    ('outer.gain', 1.0, 'outer.gain = 1.0: unknown parameter'),
+    ('tick_source', 'timer', "tick_source = 'timer': must be one of odom, clock"),
+    ('trajectory.name', 'spiral', "trajectory.name = 'spiral'"),
 ])
 def test_invalid_start_parameters_stop_the_node(name, value, message):
     context = new_context()
@@ -220,9 +219,9 @@ def test_invalid_start_parameters_stop_the_node(name, value, message):
 
 
 def test_clock_mode_ticks_at_the_control_rate(setup):
-    node, peer = setup(tick_source="clock")
+    node, peer = setup(tick_source='clock')
     peer.send_odom(1.0, 4.0, 0.0, 0.0)
-    wait_for(lambda: len(peer.states) > 0, what="first tick")
+    wait_for(lambda: len(peer.states) > 0, what='first tick')
     time.sleep(0.5)
     # Odometry is older than the timeout now, but the loop kept ticking (stopped).
     n0 = len(peer.states)
@@ -242,28 +241,28 @@ def send_odom_in(peer, frame, x, t):
     peer.odom.publish(msg)
 
 
-@pytest.mark.parametrize("frame, x, reason", [
-    ("map", 1.0, "in frame 'map'"), ("odom", 40.0, "jumped 39.00 m")])
+@pytest.mark.parametrize('frame, x, reason', [
+    ('map', 1.0, "in frame 'map'"), ('odom', 40.0, 'jumped 39.00 m')])
 def test_wrong_frame_and_jumps_stop_the_robot_over_dds(setup, log, frame, x, reason):
     node, peer = setup()
     drive(peer, 5)
     n = len(peer.twists)
     send_odom_in(peer, frame, x, 0.005)
-    wait_for(lambda: len(peer.twists) > n, what="a reply")
+    wait_for(lambda: len(peer.twists) > n, what='a reply')
     assert peer.twists[n][1].linear.x == 0.0
-    wait_for(lambda: any(reason in m for m in log.read()), what="the log")
+    wait_for(lambda: any(reason in m for m in log.read()), what='the log')
 
 
 def test_a_restarted_odometry_source_starts_tracking_over(setup):
     node, peer = setup()
     drive(peer, 1500)  # 1.5 s of odometry
-    labels = peer.states[0][1].layout.dim[0].label.split(",")
-    assert dict(zip(labels, peer.states[-1][1].data))["t"] == pytest.approx(1.499)
+    labels = peer.states[0][1].layout.dim[0].label.split(',')
+    assert dict(zip(labels, peer.states[-1][1].data))['t'] == pytest.approx(1.499)
     n = len(peer.states)
     drive(peer, 5)  # the source starts again at stamp 0
     restarted = [dict(zip(labels, m.data)) for _, m in peer.states[n:]]
     # Two messages off the time base stop the robot; the third confirms the new base and
     # trajectory time runs from the first of them.
-    assert [s["stopped"] for s in restarted] == [1.0, 1.0, 0.0, 0.0, 0.0]
-    assert [round(s["t"], 6) for s in restarted[2:]] == [0.002, 0.003, 0.004]
+    assert [s['stopped'] for s in restarted] == [1.0, 1.0, 0.0, 0.0, 0.0]
+    assert [round(s['t'], 6) for s in restarted[2:]] == [0.002, 0.003, 0.004]
     assert node.session.restarts == 1

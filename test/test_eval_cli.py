@@ -2,137 +2,137 @@
 
 import json
 import math
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 
 def run_eval(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "nfmr_dlsmc.eval_cli", *args],
+    return subprocess.run([sys.executable, '-m', 'nfmr_dlsmc.cli.eval', *args],
                           capture_output=True, text=True, timeout=120, cwd=cwd)
 
 
 def test_console_script_is_installed():
-    assert (Path(sys.executable).parent / "nfmr-eval").exists()
+    assert (Path(sys.executable).parent / 'nfmr-eval').exists()
 
 
 def test_acceptance_command_reproduces_table2():
-    proc = run_eval("--controller", "dlsmc", "--trajectory", "sine", "--x0", "1,4,0",
-                    "--duration", "100", "--json")
+    proc = run_eval('--controller', 'dlsmc', '--trajectory', 'sine', '--x0', '1,4,0',
+                    '--duration', '100', '--json')
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
-    for key in ("iae", "ise", "std", "t_conv", "final_distance", "max_v", "max_abs_omega",
-                "theta_e_iae", "max_abs_theta_e_after_conv"):
+    for key in ('iae', 'ise', 'std', 't_conv', 'final_distance', 'max_v', 'max_abs_omega',
+                'theta_e_iae', 'max_abs_theta_e_after_conv'):
         assert key in result
-    assert result["iae"] == pytest.approx(13.5757, rel=0.025)
-    assert result["ise"] == pytest.approx(37.1057, rel=0.025)
-    assert result["std"] == pytest.approx(0.5938, rel=0.025)
-    assert result["t_conv"] == pytest.approx(7.1, abs=0.3)
+    assert result['iae'] == pytest.approx(13.5757, rel=0.025)
+    assert result['ise'] == pytest.approx(37.1057, rel=0.025)
+    assert result['std'] == pytest.approx(0.5938, rel=0.025)
+    assert result['t_conv'] == pytest.approx(7.1, abs=0.3)
 
 
 def test_case2_through_the_cli():
-    proc = run_eval("--x0", f"1,1,{math.pi / 6!r}", "--disturbance", "paper", "--json",
-                    "--duration", "60")
+    proc = run_eval('--x0', f'1,1,{math.pi / 6!r}', '--disturbance', 'paper', '--json',
+                    '--duration', '60')
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert result["max_abs_omega"] <= 1.59
-    assert result["max_abs_theta_e_after_conv"] < 0.01
-    assert result["scenario"]["disturbance"] == "paper"
+    assert result['max_abs_omega'] <= 1.59
+    assert result['max_abs_theta_e_after_conv'] < 0.01
+    assert result['scenario']['disturbance'] == 'paper'
 
 
 def test_table_shows_paper_column_for_case1_only():
-    proc = run_eval("--duration", "100")
+    proc = run_eval('--duration', '100')
     assert proc.returncode == 0
-    assert "13.5757" in proc.stdout and "paper" in proc.stdout
-    proc = run_eval("--duration", "20", "--trajectory", "circle")
+    assert '13.5757' in proc.stdout and 'paper' in proc.stdout
+    proc = run_eval('--duration', '20', '--trajectory', 'circle')
     assert proc.returncode == 0
-    assert "13.5757" not in proc.stdout and "IAE of distance" in proc.stdout
+    assert '13.5757' not in proc.stdout and 'IAE of distance' in proc.stdout
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["--x0", "1,2"], "--x0"),
-    (["--x0=1,2,nan"], "--x0"),
-    (["--duration", "-5"], "--duration"),
-    (["--dt", "0"], "--dt"),
-    (["--trajectory", "spiral"], "--trajectory"),
-    (["--controller", "lqr"], "--controller"),
-    (["--disturbance", "wind"], "--disturbance"),
-    (["--params", "/nonexistent/p.yaml"], "/nonexistent/p.yaml"),
-    (["--duration", "0.0004"], "shorter than one control period"),
-    (["--duration", "1e9"], "GiB of memory"),
-    (["--gains", "config/comparison.yaml"], "the DLSMC's gains come from --params"),
-    (["--hold-from", "-1"], "--hold-from"),
-    (["--plant", "gazebo"], "--plant"),
+@pytest.mark.parametrize('args, needle', [
+    (['--x0', '1,2'], '--x0'),
+    (['--x0=1,2,nan'], '--x0'),
+    (['--duration', '-5'], '--duration'),
+    (['--dt', '0'], '--dt'),
+    (['--trajectory', 'spiral'], '--trajectory'),
+    (['--controller', 'lqr'], '--controller'),
+    (['--disturbance', 'wind'], '--disturbance'),
+    (['--params', '/nonexistent/p.yaml'], '/nonexistent/p.yaml'),
+    (['--duration', '0.0004'], 'shorter than one control period'),
+    (['--duration', '1e9'], 'GiB of memory'),
+    (['--gains', 'config/comparison.yaml'], "the DLSMC's gains come from --params"),
+    (['--hold-from', '-1'], '--hold-from'),
+    (['--plant', 'gazebo'], '--plant'),
 ])
 def test_invalid_arguments_exit_2_with_one_line(args, needle):
     proc = run_eval(*args)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0]
-    assert "Traceback" not in proc.stderr
+    assert 'Traceback' not in proc.stderr
 
 
 def test_invalid_parameter_in_file_is_named(tmp_path):
-    path = tmp_path / "gains.yaml"
-    path.write_text("controller:\n  ros__parameters:\n    inner: {p1: 32}\n")
-    proc = run_eval("--params", str(path))
+    path = tmp_path / 'gains.yaml'
+    path.write_text('controller:\n  ros__parameters:\n    inner: {p1: 32}\n')
+    proc = run_eval('--params', str(path))
     assert proc.returncode == 2
-    assert proc.stderr.strip() == ("nfmr-eval: error: inner.p1 = 32: must be a positive odd "
-                                   "integer")
+    assert proc.stderr.strip() == ('nfmr-eval: error: inner.p1 = 32: must be a positive odd '
+                                   'integer')
 
 
 def test_params_file_changes_the_run(tmp_path):
-    path = tmp_path / "slow.yaml"
-    path.write_text("controller:\n  ros__parameters:\n    limits: {v_max: 0.6}\n"
-                    "    trajectory: {name: line, line: {speed: 0.4}}\n")
-    base = json.loads(run_eval("--json").stdout.splitlines()[-1])
-    slow = json.loads(run_eval("--json", "--params", str(path)).stdout.splitlines()[-1])
-    assert base["max_v"] > 0.6
-    assert slow["max_v"] == pytest.approx(0.6)
-    assert slow["scenario"]["trajectory"] == "line"
-    assert slow["t_conv"] is not None
+    path = tmp_path / 'slow.yaml'
+    path.write_text('controller:\n  ros__parameters:\n    limits: {v_max: 0.6}\n'
+                    '    trajectory: {name: line, line: {speed: 0.4}}\n')
+    base = json.loads(run_eval('--json').stdout.splitlines()[-1])
+    slow = json.loads(run_eval('--json', '--params', str(path)).stdout.splitlines()[-1])
+    assert base['max_v'] > 0.6
+    assert slow['max_v'] == pytest.approx(0.6)
+    assert slow['scenario']['trajectory'] == 'line'
+    assert slow['t_conv'] is not None
 
 
 def test_a_comparison_controller_with_its_shipped_gains(request):
-    proc = run_eval("--controller", "kanayama", "--duration", "30", "--json",
+    proc = run_eval('--controller', 'kanayama', '--duration', '30', '--json',
                     cwd=request.config.rootpath)
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
-    from nfmr_dlsmc.comparison_scenarios import CASE1_LONGITUDINAL, Scenario, run_scenario
-    from nfmr_dlsmc.controllers import load_gain_blocks
-    from nfmr_dlsmc.metrics import simulation_metrics
+    from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario, Scenario
+    from nfmr_dlsmc.baselines.registry import load_gain_blocks
+    from nfmr_dlsmc.core.metrics import simulation_metrics
 
-    block = load_gain_blocks(request.config.rootpath / "config" / "comparison.yaml")["kanayama"]
-    scenario = Scenario("case1", CASE1_LONGITUDINAL.x0, CASE1_LONGITUDINAL.disturbance, 30.0)
-    expected = simulation_metrics(run_scenario("kanayama", block, scenario))
-    assert result["iae"] == pytest.approx(expected.iae, rel=1e-12)
-    assert result["theta_e_iae"] is None  # Kanayama's law has no desired heading theta_d
-    assert result["scenario"]["controller"] == "kanayama"
+    block = load_gain_blocks(request.config.rootpath / 'config' / 'comparison.yaml')['kanayama']
+    scenario = Scenario('case1', CASE1_LONGITUDINAL.x0, CASE1_LONGITUDINAL.disturbance, 30.0)
+    expected = simulation_metrics(run_scenario('kanayama', block, scenario))
+    assert result['iae'] == pytest.approx(expected.iae, rel=1e-12)
+    assert result['theta_e_iae'] is None  # Kanayama's law has no desired heading theta_d
+    assert result['scenario']['controller'] == 'kanayama'
 
 
 def test_a_bad_comparison_gains_file_is_named(tmp_path):
-    gains = tmp_path / "gains.yaml"
-    gains.write_text("controllers:\n  kanayama: {k_y: 0}\n")
-    proc = run_eval("--controller", "kanayama", "--gains", str(gains))
+    gains = tmp_path / 'gains.yaml'
+    gains.write_text('controllers:\n  kanayama: {k_y: 0}\n')
+    proc = run_eval('--controller', 'kanayama', '--gains', str(gains))
     assert proc.returncode == 2
-    assert "kanayama.k_y = 0" in proc.stderr and "Traceback" not in proc.stderr
+    assert 'kanayama.k_y = 0' in proc.stderr and 'Traceback' not in proc.stderr
 
 
 def test_json_is_strict_json_with_null_for_what_does_not_apply():
     # Kanayama's law has no theta_d: its theta_e figures are null, never NaN or Infinity.
-    proc = run_eval("--controller", "kanayama", "--duration", "20", "--json")
+    proc = run_eval('--controller', 'kanayama', '--duration', '20', '--json')
     assert proc.returncode == 0, proc.stderr
     line = proc.stdout.strip().splitlines()[-1]
-    result = json.loads(line, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
-    assert result["theta_e_iae"] is None and result["hold_theta_e_p99"] is None
-    assert result["hold_from"] == 15.0 and result["scenario"]["plant"] == "kinematic"
+    result = json.loads(line, parse_constant=lambda c: pytest.fail(f'{c} in JSON'))
+    assert result['theta_e_iae'] is None and result['hold_theta_e_p99'] is None
+    assert result['hold_from'] == 15.0 and result['scenario']['plant'] == 'kinematic'
 
 
 def test_a_closed_stdout_ends_quietly():
-    proc = subprocess.Popen([sys.executable, "-m", "nfmr_dlsmc.eval_cli", "--duration", "5"],
+    proc = subprocess.Popen([sys.executable, '-m', 'nfmr_dlsmc.cli.eval', '--duration', '5'],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     proc.stdout.close()  # like `| head -0`
     _, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == 0 and b"Traceback" not in stderr, stderr
+    assert proc.returncode == 0 and b'Traceback' not in stderr, stderr

@@ -1,57 +1,58 @@
 """Faults of the running system, with real processes started and stopped by the test."""
 
 import os
+from pathlib import Path
 import re
 import signal
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from nfmr_dlsmc.bag.reader import read_bag
 import pytest
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from mcap.reader import make_reader
-from mcap_ros2.decoder import DecoderFactory
+from ros_helpers import new_context, Spinner, wait_for
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
-
-from nfmr_dlsmc.bag_reader import read_bag
-from ros_helpers import Spinner, new_context, wait_for
 from test_run import start_run, wait_for_child
 
 pytestmark = pytest.mark.slow
-ANALYZE = str(Path(sys.executable).parent / "nfmr-analyze")
-REINDEX = str(Path(sys.executable).parent / "nfmr-reindex")
+ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
+REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 
 
 def gone(pid: int) -> bool:
     """Exited: no process, or a zombie left for init to reap (its parent died first)."""
     try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+        return Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0] == 'Z'
     except OSError:
         return True
 
 
 def each_fault_logged_once(log: str) -> bool:
-    """No fault reported twice in a row: each episode is logged once, and the same fault
+    """
+    No fault reported twice in a row: each episode is logged once, and the same fault
     again only after tracking resumed (a different fault, e.g. stale odometry followed by
-    the stamps of a restarted sim, is a new line)."""
-    events = [re.sub(r"[-+]?[0-9][0-9.]*", "#", line.split("]: ", 1)[-1])
+    the stamps of a restarted sim, is a new line).
+    """
+    events = [re.sub(r'[-+]?[0-9][0-9.]*', '#', line.split(']: ', 1)[-1])
               for line in log.splitlines()
-              if "stopping the robot" in line or "resumed" in line or "starts over" in line]
-    return all(not (a.startswith("stopping") and a == b) for a, b in zip(events, events[1:]))
+              if 'stopping the robot' in line or 'resumed' in line or 'starts over' in line]
+    return all(not (a.startswith('stopping') and a == b) for a, b in zip(events, events[1:]))
 
 
-@pytest.mark.parametrize("child, module", [("sim", "nfmr_sim.sim_node"),
-                                           ("controller", "nfmr_dlsmc.controller_node")])
+@pytest.mark.parametrize('child, module', [('sim', 'nfmr_sim.ros.sim_node'),
+                                           ('controller', 'nfmr_dlsmc.ros.controller_node')])
 def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child, module):
-    proc = start_run(tmp_path, "--duration", "60")
+    proc = start_run(tmp_path, '--duration', '60')
     try:
         pids = {name: wait_for_child(proc, m) for name, m in
-                (("sim", "nfmr_sim.sim_node"), ("controller", "nfmr_dlsmc.controller_node"))}
+                (('sim', 'nfmr_sim.ros.sim_node'), ('controller', 'nfmr_dlsmc.ros.controller_node'))}
         time.sleep(4.0)
         killed_at = time.monotonic()
         os.kill(pids[child], signal.SIGKILL)
@@ -60,20 +61,20 @@ def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child, mod
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 1
-    assert f"{child} exited with code -9" in stderr and f"{child}.log" in stderr
+    assert f'{child} exited with code -9' in stderr and f'{child}.log' in stderr
     assert time.monotonic() - killed_at < 30
     assert all(gone(pid) for pid in pids.values())
     bag = Path(stdout.strip().splitlines()[-1])
     with Reader(bag) as reader:  # finished and readable
         assert reader.message_count > 0
-    survivor = "controller" if child == "sim" else "sim"
-    assert "Traceback" not in (bag.parent / f"{survivor}.log").read_text()
+    survivor = 'controller' if child == 'sim' else 'sim'
+    assert 'Traceback' not in (bag.parent / f'{survivor}.log').read_text()
 
 
 def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
-    proc = start_run(tmp_path, "--duration", "60", "--stall-timeout", "3")
+    proc = start_run(tmp_path, '--duration', '60', '--stall-timeout', '3')
     try:
-        sim = wait_for_child(proc, "nfmr_sim.sim_node")
+        sim = wait_for_child(proc, 'nfmr_sim.ros.sim_node')
         time.sleep(5.0)
         os.kill(sim, signal.SIGSTOP)  # alive, but no step and no /clock any more
         stopped_at = time.monotonic()
@@ -82,7 +83,7 @@ def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 1
-    assert "the run stalled" in stderr and "the sim process stopped stepping" in stderr
+    assert 'the run stalled' in stderr and 'the sim process stopped stepping' in stderr
     assert 3.0 <= time.monotonic() - stopped_at < 3.0 + 15.0  # detection, then stopping
     assert gone(sim)
     with Reader(Path(stdout.strip().splitlines()[-1])) as reader:  # finished and readable
@@ -90,9 +91,9 @@ def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
 
 
 def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
-    proc = start_run(tmp_path, "--duration", "60")
-    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
-            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
+    proc = start_run(tmp_path, '--duration', '60')
+    kids = [wait_for_child(proc, 'nfmr_sim.ros.sim_node'),
+            wait_for_child(proc, 'nfmr_dlsmc.ros.controller_node')]
     time.sleep(3.0)
     sent = time.monotonic()
     proc.send_signal(signal.SIGTERM)
@@ -105,21 +106,21 @@ def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
 
 
 def test_killed_recorder_leaves_a_bag_readable_up_to_its_last_chunk(tmp_path):
-    proc = start_run(tmp_path, "--duration", "60")
-    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
-            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
+    proc = start_run(tmp_path, '--duration', '60')
+    kids = [wait_for_child(proc, 'nfmr_sim.ros.sim_node'),
+            wait_for_child(proc, 'nfmr_dlsmc.ros.controller_node')]
     time.sleep(6.0)
     proc.kill()  # SIGKILL: the recorder (in the launcher) dies without finishing the bag
     proc.wait(timeout=10)
     wait_for(lambda: all(gone(pid) for pid in kids), timeout=20,
-             what="children gone with the launcher")
-    bag = next(tmp_path.glob("*/bag"))
-    assert not (bag / "metadata.yaml").exists()
-    result = subprocess.run([ANALYZE, str(bag), "--json"], capture_output=True, text=True,
+             what='children gone with the launcher')
+    bag = next(tmp_path.glob('*/bag'))
+    assert not (bag / 'metadata.yaml').exists()
+    result = subprocess.run([ANALYZE, str(bag), '--json'], capture_output=True, text=True,
                             timeout=120)
     assert result.returncode == 0, result.stderr
-    warning = next(line for line in result.stderr.splitlines() if "truncated" in line)
-    assert "lost" in warning
+    warning = next(line for line in result.stderr.splitlines() if 'truncated' in line)
+    assert 'lost' in warning
     contents = read_bag(bag)
     assert contents.truncated and contents.messages
     # At most one chunk (1 MiB of messages, under a second of a run) is lost.
@@ -128,26 +129,26 @@ def test_killed_recorder_leaves_a_bag_readable_up_to_its_last_chunk(tmp_path):
     assert contents.unread_bytes < 1 << 20
     # nfmr-reindex rebuilds it from those chunks: rosbags and mcap_ros2 then open it.
     result = subprocess.run([REINDEX, str(bag)], capture_output=True, text=True, timeout=120)
-    assert result.returncode == 0 and "rebuilt with" in result.stdout, result.stderr
+    assert result.returncode == 0 and 'rebuilt with' in result.stdout, result.stderr
     with Reader(bag) as reader:
         assert reader.message_count == len(contents.messages)
-    with (bag / "bag_0.mcap").open("rb") as stream:
+    with (bag / 'bag_0.mcap').open('rb') as stream:
         decoded = make_reader(stream, decoder_factories=[DecoderFactory()])
         assert sum(1 for _ in decoded.iter_decoded_messages()) == len(contents.messages)
 
 
 def test_a_command_flood_does_not_slow_the_realtime_sim():
     context = new_context()
-    sim_proc = subprocess.Popen([str(Path(sys.executable).parent / "sim"), "--ros-args", "-p",
-                                 "mode:=realtime"], stdout=subprocess.DEVNULL,
+    sim_proc = subprocess.Popen([str(Path(sys.executable).parent / 'sim'), '--ros-args', '-p',
+                                 'mode:=realtime'], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
-    node = Node("flooder", context=context)
+    node = Node('flooder', context=context)
     clocks = []
-    node.create_subscription(Clock, "/clock", lambda m: clocks.append(
+    node.create_subscription(Clock, '/clock', lambda m: clocks.append(
         (time.monotonic(), m.clock.sec + m.clock.nanosec * 1e-9)), 10)
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-    steer = node.create_publisher(Float64MultiArray, "steer_position_controller/commands", qos)
-    wheels = node.create_publisher(Float64MultiArray, "wheel_velocity_controller/commands", qos)
+    steer = node.create_publisher(Float64MultiArray, 'steer_position_controller/commands', qos)
+    wheels = node.create_publisher(Float64MultiArray, 'wheel_velocity_controller/commands', qos)
     spinner = Spinner(context, node)
     stop = threading.Event()
     sent = [0]
@@ -165,7 +166,7 @@ def test_a_command_flood_does_not_slow_the_realtime_sim():
                 time.sleep(delay)
 
     try:
-        wait_for(lambda: len(clocks) > 100, timeout=60, what="the sim running")
+        wait_for(lambda: len(clocks) > 100, timeout=60, what='the sim running')
         flooder = threading.Thread(target=flood, daemon=True)
         flooder.start()
         time.sleep(1.0)
@@ -193,59 +194,61 @@ def _sh(*command):
     return subprocess.run(list(command), capture_output=True, text=True, timeout=30)
 
 
-@pytest.fixture(params=["5ms", None], ids=["netem-5ms", "no-delay"])
+@pytest.fixture(params=['5ms', None], ids=['netem-5ms', 'no-delay'])
 def two_hosts(request):
-    """Two network namespaces (our own test hosts) joined by a veth pair, with netem delay
-    on both ends (or none); removed afterwards."""
+    """
+    Two network namespaces (our own test hosts) joined by a veth pair, with netem delay
+    on both ends (or none); removed afterwards.
+    """
     delay = request.param
-    tag = f"{os.getpid() % 100000}"
-    a, b, va, vb = f"nfmr_a{tag}", f"nfmr_b{tag}", f"nfa{tag}", f"nfb{tag}"
-    made = _sh("ip", "netns", "add", a)
+    tag = f'{os.getpid() % 100000}'
+    a, b, va, vb = f'nfmr_a{tag}', f'nfmr_b{tag}', f'nfa{tag}', f'nfb{tag}'
+    made = _sh('ip', 'netns', 'add', a)
     if made.returncode != 0:
-        pytest.skip(f"cannot create network namespaces here: {made.stderr.strip()}")
+        pytest.skip(f'cannot create network namespaces here: {made.stderr.strip()}')
     try:
-        commands = [("ip", "netns", "add", b),
-                    ("ip", "link", "add", va, "type", "veth", "peer", "name", vb),
-                    ("ip", "link", "set", va, "netns", a), ("ip", "link", "set", vb, "netns", b),
-                    ("ip", "-n", a, "addr", "add", "10.213.7.1/24", "dev", va),
-                    ("ip", "-n", b, "addr", "add", "10.213.7.2/24", "dev", vb)]
+        commands = [('ip', 'netns', 'add', b),
+                    ('ip', 'link', 'add', va, 'type', 'veth', 'peer', 'name', vb),
+                    ('ip', 'link', 'set', va, 'netns', a), ('ip', 'link', 'set', vb, 'netns', b),
+                    ('ip', '-n', a, 'addr', 'add', '10.213.7.1/24', 'dev', va),
+                    ('ip', '-n', b, 'addr', 'add', '10.213.7.2/24', 'dev', vb)]
         for ns, dev in ((a, va), (b, vb)):
-            commands += [("ip", "-n", ns, "link", "set", dev, "up"),
-                         ("ip", "-n", ns, "link", "set", "lo", "up"),
+            commands += [('ip', '-n', ns, 'link', 'set', dev, 'up'),
+                         ('ip', '-n', ns, 'link', 'set', 'lo', 'up'),
                          # DDS discovery is multicast: route it over the link.
-                         ("ip", "-n", ns, "route", "add", "224.0.0.0/4", "dev", dev)]
+                         ('ip', '-n', ns, 'route', 'add', '224.0.0.0/4', 'dev', dev)]
         for command in commands:
             result = _sh(*command)
             assert result.returncode == 0, f"{' '.join(command)}: {result.stderr}"
         if delay:
             for ns, dev in ((a, va), (b, vb)):
-                result = _sh("ip", "netns", "exec", ns, "tc", "qdisc", "add", "dev", dev,
-                             "root", "netem", "delay", delay)
+                result = _sh('ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'add', 'dev', dev,
+                             'root', 'netem', 'delay', delay)
                 if result.returncode != 0:
-                    pytest.skip(f"netem is not available on this kernel: {result.stderr.strip()}")
+                    pytest.skip(f'netem is not available on this kernel: {result.stderr.strip()}')
         yield a, b
     finally:
-        _sh("ip", "netns", "del", a)
-        _sh("ip", "netns", "del", b)
+        _sh('ip', 'netns', 'del', a)
+        _sh('ip', 'netns', 'del', b)
 
 
 def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
     a, b = two_hosts
-    config = str(Path(__file__).parents[1] / "config" / "paper_case1.yaml")
+    config = str(Path(__file__).parents[1] / 'config' / 'paper_case1.yaml')
     # UDP only: Fast DDS would otherwise move the data through shared memory (same host).
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="SUBNET",
-               FASTDDS_BUILTIN_TRANSPORTS="UDPv4")
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET',
+               FASTDDS_BUILTIN_TRANSPORTS='UDPv4')
     bin_dir = Path(sys.executable).parent
-    procs = [subprocess.Popen(["ip", "netns", "exec", a, str(bin_dir / "sim"), "--ros-args",
-                               "--params-file", config, "-p", "start_after_subscribers:=1"],
+    procs = [subprocess.Popen(['ip', 'netns', 'exec', a, str(bin_dir / 'sim'), '--ros-args',
+                               '--params-file', config, '-p', 'start_after_subscribers:=1'],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-             subprocess.Popen(["ip", "netns", "exec", b, str(bin_dir / "controller"),
-                               "--ros-args", "--params-file", config],
+             subprocess.Popen(['ip', 'netns', 'exec', b, str(bin_dir / 'controller'),
+                               '--ros-args', '--params-file', config],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         listener = subprocess.run(
-            ["ip", "netns", "exec", b, sys.executable,
-             str(Path(__file__).parent / "netns_listener.py"), "9.0"],
+            ['ip', 'netns', 'exec', b, sys.executable,
+             str(Path(__file__).parent / 'netns_listener.py'), '9.0'],
             env=env, capture_output=True, text=True, timeout=300)
     finally:
         for proc in procs:
@@ -256,47 +259,49 @@ def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
             except subprocess.TimeoutExpired:
                 proc.kill()
     line = listener.stdout.strip().splitlines()[-1]
-    assert float(line.split("distance=")[1]) < 0.15, line  # back on the trajectory
+    assert float(line.split('distance=')[1]) < 0.15, line  # back on the trajectory
 
 
 def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
-    """SIGKILL the sim mid-run: the controller process commands zero speed within its
+    """
+    SIGKILL the sim mid-run: the controller process commands zero speed within its
     odometry timeout (0.25 s in the file) plus 50 ms, logs it once and keeps running; a new
-    sim is then tracked from trajectory time 0."""
-    config = str(Path(__file__).parents[1] / "config" / "paper_case1.yaml")
+    sim is then tracked from trajectory time 0.
+    """
+    config = str(Path(__file__).parents[1] / 'config' / 'paper_case1.yaml')
     bin_dir = Path(sys.executable).parent
     context = new_context()
-    listener = Node("restart_listener", context=context)
+    listener = Node('restart_listener', context=context)
     states = []
     listener.create_subscription(
-        Float64MultiArray, "controller_state",
-        lambda m: states.append(dict(zip(m.layout.dim[0].label.split(","), m.data))),
+        Float64MultiArray, 'controller_state',
+        lambda m: states.append(dict(zip(m.layout.dim[0].label.split(','), m.data))),
         QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
     spinner = Spinner(context, listener)
 
     def start_sim():
-        return subprocess.Popen([str(bin_dir / "sim"), "--ros-args", "--params-file", config,
-                                 "-p", "start_after_subscribers:=1"],
+        return subprocess.Popen([str(bin_dir / 'sim'), '--ros-args', '--params-file', config,
+                                 '-p', 'start_after_subscribers:=1'],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
-    controller = subprocess.Popen([str(bin_dir / "controller"), "--ros-args", "--params-file",
+    controller = subprocess.Popen([str(bin_dir / 'controller'), '--ros-args', '--params-file',
                                    config], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                   text=True)
     sim = start_sim()
     try:
-        wait_for(lambda: states and states[-1]["t"] > 2.0, timeout=60, what="first run at 2 s")
+        wait_for(lambda: states and states[-1]['t'] > 2.0, timeout=60, what='first run at 2 s')
         sim.kill()
         sim.wait(timeout=10)
         killed = time.monotonic()
-        wait_for(lambda: states[-1]["stopped"] == 1.0, timeout=10, what="a safety stop")
+        wait_for(lambda: states[-1]['stopped'] == 1.0, timeout=10, what='a safety stop')
         assert time.monotonic() - killed < 0.25 + 0.05 + 0.05  # timeout, 50 ms, delivery
         n = len(states)
         sim = start_sim()
-        wait_for(lambda: any(s["stopped"] == 0.0 for s in states[n:]) and
-                 states[-1]["t"] > 1.0, timeout=60, what="tracking again")
-        again = [s for s in states[n:] if s["stopped"] == 0.0]
+        wait_for(lambda: any(s['stopped'] == 0.0 for s in states[n:]) and
+                 states[-1]['t'] > 1.0, timeout=60, what='tracking again')
+        again = [s for s in states[n:] if s['stopped'] == 0.0]
         # Trajectory time from the new sim's first message; the third confirms the restart.
-        assert again[0]["t"] == pytest.approx(0.002, abs=0.003)
+        assert again[0]['t'] == pytest.approx(0.002, abs=0.003)
         assert controller.poll() is None  # the controller kept running throughout
     finally:
         for proc in (sim, controller):
@@ -310,8 +315,8 @@ def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
         listener.destroy_node()
         context.try_shutdown()
     log = controller.stdout.read()
-    assert "stopping the robot: odometry is" in log and each_fault_logged_once(log)
-    assert "tracking starts over" in log
+    assert 'stopping the robot: odometry is' in log and each_fault_logged_once(log)
+    assert 'tracking starts over' in log
 
 
 def test_stale_odometry_stops_a_controller_process_within_50_ms():
@@ -320,36 +325,36 @@ def test_stale_odometry_stops_a_controller_process_within_50_ms():
     from nav_msgs.msg import Odometry
 
     context = new_context()
-    peer = Node("stale_peer", context=context)
+    peer = Node('stale_peer', context=context)
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-    odom = peer.create_publisher(Odometry, "odom", qos)
+    odom = peer.create_publisher(Odometry, 'odom', qos)
     replies = []
-    peer.create_subscription(Twist, "cmd_vel", lambda m: replies.append(
+    peer.create_subscription(Twist, 'cmd_vel', lambda m: replies.append(
         (time.monotonic(), m.linear.x)), qos)
     spinner = Spinner(context, peer)
-    controller = subprocess.Popen([str(Path(sys.executable).parent / "controller"),
-                                   "--ros-args", "-p", "odom_timeout:=0.1"],
+    controller = subprocess.Popen([str(Path(sys.executable).parent / 'controller'),
+                                   '--ros-args', '-p', 'odom_timeout:=0.1'],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     delays = []
     try:
-        wait_for(lambda: peer.count_subscribers("odom") > 0 and
-                 peer.count_publishers("cmd_vel") > 0, timeout=30, what="discovery")
+        wait_for(lambda: peer.count_subscribers('odom') > 0 and
+                 peer.count_publishers('cmd_vel') > 0, timeout=30, what='discovery')
         time.sleep(0.5)
         stamp = 0.0
         for episode in range(5):
             for _ in range(20):
                 n = len(replies)
                 msg = Odometry()
-                msg.header.frame_id = "odom"
+                msg.header.frame_id = 'odom'
                 stamp += 0.001
                 msg.header.stamp.sec, msg.header.stamp.nanosec = 0, int(round(stamp * 1e9))
                 msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
                 msg.pose.pose.orientation.w = 1.0
                 sent = time.monotonic()
                 odom.publish(msg)
-                wait_for(lambda: len(replies) > n, timeout=5, what="a reply")
+                wait_for(lambda: len(replies) > n, timeout=5, what='a reply')
             n = len(replies)
-            wait_for(lambda: any(v == 0.0 for _, v in replies[n:]), timeout=5, what="a stop")
+            wait_for(lambda: any(v == 0.0 for _, v in replies[n:]), timeout=5, what='a stop')
             stop = next(t for t, v in replies[n:] if v == 0.0)
             delays.append(stop - (sent + 0.1))
         # Measured from our send: the controller received the odometry even later, so this
@@ -363,24 +368,24 @@ def test_stale_odometry_stops_a_controller_process_within_50_ms():
         context.try_shutdown()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 def test_each_node_ends_at_once_on_a_signal_while_they_run_together(sig):
     # A controller and a sim in real time, talking: each stops within 5 s of the signal,
     # with exit 0 and no traceback (a publisher whose context is gone must not raise).
-    config = str(Path(__file__).parents[1] / "config" / "robot_case1.yaml")
+    config = str(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml')
     bin_dir = Path(sys.executable).parent
-    procs = {name: subprocess.Popen([str(bin_dir / name), "--ros-args", "--params-file", config,
-                                     *(["-p", "mode:=realtime"] if name == "sim" else [])],
+    procs = {name: subprocess.Popen([str(bin_dir / name), '--ros-args', '--params-file', config,
+                                     *(['-p', 'mode:=realtime'] if name == 'sim' else [])],
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-             for name in ("sim", "controller")}
+             for name in ('sim', 'controller')}
     try:
         time.sleep(5.0)  # discovery, then odometry and commands flow
-        for name in ("controller", "sim"):
+        for name in ('controller', 'sim'):
             sent = time.monotonic()
             procs[name].send_signal(sig)
             out, _ = procs[name].communicate(timeout=15)
             assert time.monotonic() - sent < 5.0, name
-            assert procs[name].returncode == 0 and "Traceback" not in out, (name, out)
+            assert procs[name].returncode == 0 and 'Traceback' not in out, (name, out)
     finally:
         for proc in procs.values():
             if proc.poll() is None:

@@ -2,10 +2,9 @@
 
 import math
 
+from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.validation import ParameterError
 import pytest
-
-from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
-from nfmr_dlsmc.validation import ParameterError
 
 
 def test_defaults_are_the_paper_values():
@@ -18,35 +17,35 @@ def test_defaults_are_the_paper_values():
     assert DlsmcConfig().dt == 0.001
 
 
-@pytest.mark.parametrize("cls, kwargs, name, rule", [
-    (OuterLoopGains, {"p2": 32}, "outer.p2", "positive odd integer"),
-    (OuterLoopGains, {"q3": 16}, "outer.q3", "positive odd integer"),
-    (OuterLoopGains, {"p3": -33}, "outer.p3", "positive odd integer"),
-    (OuterLoopGains, {"p2": 33.0}, "outer.p2", "positive odd integer"),
-    (OuterLoopGains, {"p2": True}, "outer.p2", "positive odd integer"),
-    (OuterLoopGains, {"p2": 17, "q2": 33}, "outer.p2", "1 < outer.p2/outer.q2 < 2"),
-    (OuterLoopGains, {"p3": 35, "q3": 17}, "outer.p3", "1 < outer.p3/outer.q3 < 2"),
-    (OuterLoopGains, {"p2": 17, "q2": 17}, "outer.p2", "1 < outer.p2/outer.q2 < 2"),
-    (InnerLoopGains, {"p1": 47, "q1": 23}, "inner.p1", "1 < inner.p1/inner.q1 < 2"),
-    (InnerLoopGains, {"q1": 0}, "inner.q1", "positive odd integer"),
-    (InnerLoopGains, {"eps": 0.0}, "inner.eps", "must be > 0"),
-    (InnerLoopGains, {"eps": -0.01}, "inner.eps", "must be > 0"),
-    (InnerLoopGains, {"eps": 4.0}, "inner.eps", "must be < pi"),
-    (InnerLoopGains, {"L1": 1.0}, "inner.L1", "must be > 1"),
-    (InnerLoopGains, {"L0": 0.0}, "inner.L0", "must be > 0"),
-    (InnerLoopGains, {"lam": -1.0}, "inner.lam", "must be > 0"),
-    (InnerLoopGains, {"k1": math.nan}, "inner.k1", "finite"),
-    (OuterLoopGains, {"C1": 0.0}, "outer.C1", "must be > 0"),
-    (OuterLoopGains, {"C2": -0.6}, "outer.C2", "must be > 0"),
-    (OuterLoopGains, {"xi": 0.0}, "outer.xi", "must be > 0"),
-    (OuterLoopGains, {"k2": math.inf}, "outer.k2", "finite"),
-    (OuterLoopGains, {"h": "1"}, "outer.h", "real number"),
-    (InputLimits, {"v_min": 0.0}, "limits.v_min", "must be > 0"),
-    (InputLimits, {"v_max": 0.1}, "limits.v_max", "must be > limits.v_min"),
-    (InputLimits, {"v_max": 0.2}, "limits.v_max", "must be > limits.v_min"),
-    (InputLimits, {"omega_max": -1.59}, "limits.omega_max", "must be > 0"),
-    (InputLimits, {"omega_max": math.nan}, "limits.omega_max", "finite"),
-    (DlsmcConfig, {"dt": 0.0}, "dt", "must be > 0"),
+@pytest.mark.parametrize('cls, kwargs, name, rule', [
+    (OuterLoopGains, {'p2': 32}, 'outer.p2', 'positive odd integer'),
+    (OuterLoopGains, {'q3': 16}, 'outer.q3', 'positive odd integer'),
+    (OuterLoopGains, {'p3': -33}, 'outer.p3', 'positive odd integer'),
+    (OuterLoopGains, {'p2': 33.0}, 'outer.p2', 'positive odd integer'),
+    (OuterLoopGains, {'p2': True}, 'outer.p2', 'positive odd integer'),
+    (OuterLoopGains, {'p2': 17, 'q2': 33}, 'outer.p2', '1 < outer.p2/outer.q2 < 2'),
+    (OuterLoopGains, {'p3': 35, 'q3': 17}, 'outer.p3', '1 < outer.p3/outer.q3 < 2'),
+    (OuterLoopGains, {'p2': 17, 'q2': 17}, 'outer.p2', '1 < outer.p2/outer.q2 < 2'),
+    (InnerLoopGains, {'p1': 47, 'q1': 23}, 'inner.p1', '1 < inner.p1/inner.q1 < 2'),
+    (InnerLoopGains, {'q1': 0}, 'inner.q1', 'positive odd integer'),
+    (InnerLoopGains, {'eps': 0.0}, 'inner.eps', 'must be > 0'),
+    (InnerLoopGains, {'eps': -0.01}, 'inner.eps', 'must be > 0'),
+    (InnerLoopGains, {'eps': 4.0}, 'inner.eps', 'must be < pi'),
+    (InnerLoopGains, {'L1': 1.0}, 'inner.L1', 'must be > 1'),
+    (InnerLoopGains, {'L0': 0.0}, 'inner.L0', 'must be > 0'),
+    (InnerLoopGains, {'lam': -1.0}, 'inner.lam', 'must be > 0'),
+    (InnerLoopGains, {'k1': math.nan}, 'inner.k1', 'finite'),
+    (OuterLoopGains, {'C1': 0.0}, 'outer.C1', 'must be > 0'),
+    (OuterLoopGains, {'C2': -0.6}, 'outer.C2', 'must be > 0'),
+    (OuterLoopGains, {'xi': 0.0}, 'outer.xi', 'must be > 0'),
+    (OuterLoopGains, {'k2': math.inf}, 'outer.k2', 'finite'),
+    (OuterLoopGains, {'h': '1'}, 'outer.h', 'real number'),
+    (InputLimits, {'v_min': 0.0}, 'limits.v_min', 'must be > 0'),
+    (InputLimits, {'v_max': 0.1}, 'limits.v_max', 'must be > limits.v_min'),
+    (InputLimits, {'v_max': 0.2}, 'limits.v_max', 'must be > limits.v_min'),
+    (InputLimits, {'omega_max': -1.59}, 'limits.omega_max', 'must be > 0'),
+    (InputLimits, {'omega_max': math.nan}, 'limits.omega_max', 'finite'),
+    (DlsmcConfig, {'dt': 0.0}, 'dt', 'must be > 0'),
 ])
 def test_invalid_parameter_is_named(cls, kwargs, name, rule):
     with pytest.raises(ParameterError) as info:
@@ -54,14 +53,14 @@ def test_invalid_parameter_is_named(cls, kwargs, name, rule):
     err = info.value
     assert err.parameter == name
     message = str(err)
-    assert message.startswith(f"{name} = ")
+    assert message.startswith(f'{name} = ')
     assert rule in message
-    bad = kwargs[name.split(".")[-1]]
+    bad = kwargs[name.split('.')[-1]]
     assert repr(bad) in message
 
 
 def test_error_carries_unit():
-    with pytest.raises(ParameterError, match=r"outer\.xi = -0\.5 m: must be > 0"):
+    with pytest.raises(ParameterError, match=r'outer\.xi = -0\.5 m: must be > 0'):
         OuterLoopGains(xi=-0.5)
 
 

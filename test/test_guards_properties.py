@@ -1,30 +1,31 @@
-"""Property-based tests of the ROS-free guards: whatever odometry arrives and whatever
-(v, omega) the mapping is asked for, no exception and never a non-finite command."""
+"""
+Property-based tests of the ROS-free guards: whatever odometry arrives and whatever
+(v, omega) the mapping is asked for, no exception and never a non-finite command.
+"""
 
 import math
 from pathlib import Path
 
-import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from nfmr_dlsmc.params import ControllerParams, controller_params, load_params_file
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
-from nfmr_dlsmc.tracking_session import TrackingSession
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.runtime.params import controller_params, ControllerParams, load_params_file
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
+import numpy as np
 
 ANY_FLOAT = st.floats(allow_nan=True, allow_infinity=True)
-ANY_FRAME = st.sampled_from(["odom", "map", "", "odom "])
+ANY_FRAME = st.sampled_from(['odom', 'map', '', 'odom '])
 
 
-ROBOT = controller_params(load_params_file(Path(__file__).parents[1] / "config" /
-                                          "robot_case1.yaml"))
+ROBOT = controller_params(load_params_file(Path(__file__).parents[1] / 'config' /
+                                          'robot_case1.yaml'))
 
 
 @settings(max_examples=300, deadline=None)
 @given(st.lists(st.tuples(ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FRAME),
-                min_size=1, max_size=12), st.sampled_from(["paper", "robot"]))
+                min_size=1, max_size=12), st.sampled_from(['paper', 'robot']))
 def test_any_odometry_gives_a_finite_command_or_a_stop(messages, profile):
-    params = ControllerParams() if profile == "paper" else ROBOT
+    params = ControllerParams() if profile == 'paper' else ROBOT
     session = TrackingSession(params, odom_timeout=0.25)
     wall = 0.0
     for x, y, theta, stamp, frame in messages:

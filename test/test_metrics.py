@@ -2,11 +2,14 @@
 
 import math
 
+from nfmr_dlsmc.core.metrics import (
+    convergence_time,
+    error_criteria,
+    total_variation_rate,
+    tracking_metrics,
+)
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.metrics import (convergence_time, error_criteria, total_variation_rate,
-                                tracking_metrics)
 
 
 def test_error_criteria_of_a_known_signal():
@@ -47,7 +50,7 @@ def test_tracking_metrics_wraps_heading_errors():
 
 
 def test_uneven_sampling_weighs_each_sample_by_its_duration():
-    from nfmr_dlsmc.metrics import sample_durations
+    from nfmr_dlsmc.core.metrics import sample_durations
 
     t = np.array([0.0, 0.001, 0.003, 0.004])
     np.testing.assert_allclose(sample_durations(t), [0.001, 0.002, 0.001, 0.001])

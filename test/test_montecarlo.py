@@ -1,78 +1,79 @@
-"""``nfmr-montecarlo`` on the pybullet chassis and with the robot profile on the kinematic
-model: one simulation per start, success judged per start."""
+"""
+``nfmr-montecarlo`` on the pybullet chassis and with the robot profile on the kinematic
+model: one simulation per start, success judged per start.
+"""
 
 import json
 import math
 
+from nfmr_dlsmc.cli import montecarlo as montecarlo_cli
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
-from nfmr_dlsmc import montecarlo_cli
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.params import controller_params, load_params_file
-
-ROBOT = "config/robot_case1.yaml"
+ROBOT = 'config/robot_case1.yaml'
 
 
 def _summary(capsys, *argv) -> dict:
-    assert montecarlo_cli.main([*argv, "--json"]) == 0
+    assert montecarlo_cli.main([*argv, '--json']) == 0
     return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
 
 
 def test_pybullet_success_rate_is_that_of_the_starts(capsys):
     # Seed 0 in +-1 m, +-0.3 rad: one start settles within 5 s, the other (ahead of the
     # reference) needs about 11 s, so with 12 s runs and a 3 s hold window one succeeds.
-    summary = _summary(capsys, "--plant", "pybullet", "--params", ROBOT, "--n", "2",
-                       "--duration", "12", "--hold-last", "3", "--x0-range", "1,1,0.3",
-                       "--jobs", "2")
-    runs = summary["runs"]
-    assert summary["plant"] == "pybullet" and len(runs) == summary["n"] == 2
-    assert summary["criterion"] == "within 1 cm over the last 3 s"
-    assert sorted(run["success"] for run in runs) == [False, True]
-    assert summary["success_rate"] == np.mean([run["success"] for run in runs]) == 0.5
+    summary = _summary(capsys, '--plant', 'pybullet', '--params', ROBOT, '--n', '2',
+                       '--duration', '12', '--hold-last', '3', '--x0-range', '1,1,0.3',
+                       '--jobs', '2')
+    runs = summary['runs']
+    assert summary['plant'] == 'pybullet' and len(runs) == summary['n'] == 2
+    assert summary['criterion'] == 'within 1 cm over the last 3 s'
+    assert sorted(run['success'] for run in runs) == [False, True]
+    assert summary['success_rate'] == np.mean([run['success'] for run in runs]) == 0.5
     for run in runs:
-        assert run["success"] == (run["hold_distance_max"] <= 0.01)
+        assert run['success'] == (run['hold_distance_max'] <= 0.01)
         # Within 1 cm from t_conv_1cm on: held iff that is before the window.
-        late = run["t_conv_1cm"] is None or run["t_conv_1cm"] > 12.0 - 3.0
-        assert run["success"] != late
-    assert summary["worst"][0]["success"] is False
-    assert summary["iae"]["count"] == 2
+        late = run['t_conv_1cm'] is None or run['t_conv_1cm'] > 12.0 - 3.0
+        assert run['success'] != late
+    assert summary['worst'][0]['success'] is False
+    assert summary['iae']['count'] == 2
 
 
 def test_kinematic_robot_profile_runs_start_by_start(capsys):
-    summary = _summary(capsys, "--params", ROBOT, "--n", "3", "--seed", "1", "--duration",
-                       "20", "--x0-range", "1,1,0.3", "--jobs", "2")
+    summary = _summary(capsys, '--params', ROBOT, '--n', '3', '--seed', '1', '--duration',
+                       '20', '--x0-range', '1,1,0.3', '--jobs', '2')
     params = controller_params(load_params_file(ROBOT))
-    assert summary["plant"] == "kinematic" and summary["criterion"] == "converges to 1 mm"
-    for run in summary["runs"]:
+    assert summary['plant'] == 'kinematic' and summary['criterion'] == 'converges to 1 mm'
+    for run in summary['runs']:
         # The batch simulator cannot run the robot profile: each start is this simulation.
-        alone = simulate(DlsmcController(params.dlsmc), params.trajectory, run["x0"], 20.0,
+        alone = simulate(DlsmcController(params.dlsmc), params.trajectory, run['x0'], 20.0,
                          params.dlsmc.dt)
         figures = simulation_metrics(alone)
-        assert run["iae"] == pytest.approx(figures.iae, rel=1e-12)
-        assert run["t_conv"] == figures.t_conv
-        assert run["success"] == (figures.t_conv is not None)
-    assert summary["success_rate"] == np.mean([run["success"] for run in summary["runs"]])
+        assert run['iae'] == pytest.approx(figures.iae, rel=1e-12)
+        assert run['t_conv'] == figures.t_conv
+        assert run['success'] == (figures.t_conv is not None)
+    assert summary['success_rate'] == np.mean([run['success'] for run in summary['runs']])
 
 
 def test_paper_law_keeps_the_batch_and_its_summary(capsys):
-    summary = _summary(capsys, "--n", "4", "--duration", "20", "--x0-range", "1,1,0.3")
-    assert summary["plant"] == "kinematic"
-    assert "t_conv_1cm" not in summary  # the batch simulator keeps only its own figures
-    assert summary["success_rate"] == np.mean([run["success"] for run in summary["runs"]])
-    assert all(math.isfinite(run["iae"]) for run in summary["runs"])
+    summary = _summary(capsys, '--n', '4', '--duration', '20', '--x0-range', '1,1,0.3')
+    assert summary['plant'] == 'kinematic'
+    assert 't_conv_1cm' not in summary  # the batch simulator keeps only its own figures
+    assert summary['success_rate'] == np.mean([run['success'] for run in summary['runs']])
+    assert all(math.isfinite(run['iae']) for run in summary['runs'])
 
 
-@pytest.mark.parametrize("argv, text", [
-    (["--hold-last", "0"], "argument --hold-last: must be > 0"),
-    (["--plant", "tractor"], "argument --plant: invalid choice"),
-    (["--duration", "-1"], "argument --duration: must be > 0"),
+@pytest.mark.parametrize('argv, text', [
+    (['--hold-last', '0'], 'argument --hold-last: must be > 0'),
+    (['--plant', 'tractor'], 'argument --plant: invalid choice'),
+    (['--duration', '-1'], 'argument --duration: must be > 0'),
 ])
 def test_bad_arguments_are_one_line_errors(capsys, argv, text):
     with pytest.raises(SystemExit) as info:
         montecarlo_cli.main(argv)
     assert info.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and text in err
+    assert err.count('\n') == 1 and text in err

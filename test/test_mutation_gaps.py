@@ -1,24 +1,33 @@
-"""Behaviour that mutation testing (doc/mutation.md) found no fast test for.
+"""
+Behaviour that mutation testing (doc/mutation.md) found no fast test for.
 
 Every expected value is computed by hand from the geometry or the formula in the
 docstring, not taken from the code under test.
 """
 
-import math
 from dataclasses import replace
+import math
 
+from nfmr_dlsmc.core.gains import DlsmcConfig, InputLimits
+from nfmr_dlsmc.core.metrics import (
+    format_metric,
+    hold_metrics,
+    sample_durations,
+    total_variation_rate,
+    tracking_metrics,
+)
+from nfmr_dlsmc.core.sliding_functions import (
+    bounded_rate,
+    bounded_rate_slope,
+    reaching_term,
+    reaching_term_slope,
+)
+from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
+from nfmr_dlsmc.runtime.params import ControllerParams
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 import numpy as np
-import yaml
 import pytest
-
-from nfmr_dlsmc.gains import DlsmcConfig, InputLimits
-from nfmr_dlsmc.metrics import (format_metric, hold_metrics, sample_durations,
-                                total_variation_rate, tracking_metrics)
-from nfmr_dlsmc.params import ControllerParams
-from nfmr_dlsmc.sliding_functions import (bounded_rate, bounded_rate_slope, reaching_term,
-                                          reaching_term_slope)
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, steer_angle_series
-from nfmr_dlsmc.tracking_session import TrackingSession
+import yaml
 
 GEOMETRY = RobotGeometry()  # L = 0.89 m, track 0.53 m
 A, B = 0.5 * 0.89, 0.5 * 0.53  # half wheelbase, half track [m]
@@ -96,16 +105,16 @@ def test_series_clips_to_the_steer_limit():
 
 
 def test_series_refuses_crab_mode():
-    with pytest.raises(ValueError, match="crab mode"):
+    with pytest.raises(ValueError, match='crab mode'):
         steer_angle_series([1.0], [0.0], GEOMETRY, SteerMode(-1.0, 2.0))
 
 
 # --- format_metric: the table cells of nfmr-eval, nfmr-analyze and the comparison report --
 
-@pytest.mark.parametrize("value, text", [
-    (None, "—"), (math.nan, "—"),
-    (0.0, "0.0000"), (1.23456, "1.2346"), (-2.5, "-2.5000"), (0.01, "0.0100"),
-    (0.0012345, "1.234e-03"), (-0.005, "-5.000e-03"),
+@pytest.mark.parametrize('value, text', [
+    (None, '—'), (math.nan, '—'),
+    (0.0, '0.0000'), (1.23456, '1.2346'), (-2.5, '-2.5000'), (0.01, '0.0100'),
+    (0.0012345, '1.234e-03'), (-0.005, '-5.000e-03'),
 ])
 def test_format_metric_cells(value, text):
     assert format_metric(value) == text
@@ -126,12 +135,12 @@ def test_reaching_term_is_the_odd_power_erf_product():
 
 def test_set_params_changes_the_limits_of_the_next_tick():
     s = TrackingSession(ControllerParams(), odom_timeout=0.1)
-    s.on_odometry(30.0, 40.0, 0.0, 0.0, 0.0, 0.0, "odom")
+    s.on_odometry(30.0, 40.0, 0.0, 0.0, 0.0, 0.0, 'odom')
     assert s.tick(0.0, 0.0).v < 1.0  # at t = 0 s(0) = 0: a modest speed command
     fast = InputLimits(v_min=1.0, v_max=2.0)
     s.set_params(ControllerParams(dlsmc=replace(DlsmcConfig(), limits=fast)))
     assert s.params.dlsmc.limits == fast
-    s.on_odometry(30.0, 40.0, 0.0, 0.001, 0.001, 0.001, "odom")
+    s.on_odometry(30.0, 40.0, 0.0, 0.001, 0.001, 0.001, 'odom')
     assert s.tick(0.001, 0.001).v == 1.0  # now held up at the new v_min
 
 
@@ -154,37 +163,37 @@ def _hold_case():
 def test_hold_metrics_cover_the_samples_from_hold_from_on():
     t, distance, theta_e, omega, dt, saturated, steer, joint = _hold_case()
     m = hold_metrics(t, distance, theta_e, omega, dt, 2.0, saturated, steer, joint)
-    assert m["hold_from"] == 2.0
+    assert m['hold_from'] == 2.0
     # Window t >= 2 (the sample at t = 2 included): distance 1, 3, 2 -> sorted 1, 2, 3;
     # the 99th percentile interpolates at rank 0.99 * 2 = 1.98: 2 + 0.98 * (3 - 2).
-    assert math.isclose(m["hold_distance_p99"], 2.98)
-    assert m["hold_distance_max"] == 3.0
+    assert math.isclose(m['hold_distance_p99'], 2.98)
+    assert m['hold_distance_max'] == 3.0
     # |theta_e| 0.5, 0.2, 0.1 -> sorted 0.1, 0.2, 0.5: 0.2 + 0.98 * 0.3.
-    assert math.isclose(m["hold_theta_e_p99"], 0.494)
-    assert m["hold_theta_e_max"] == 0.5
+    assert math.isclose(m['hold_theta_e_p99'], 0.494)
+    assert m['hold_theta_e_max'] == 0.5
     # omega 1, -1, 0.5: total variation 2 + 1.5 over the durations of all but the last
     # sample, 0.5 + 0.25 s.
-    assert math.isclose(m["hold_omega_tv"], 3.5 / 0.75)
-    assert math.isclose(m["hold_omega_saturated"], 2.0 / 3.0)
+    assert math.isclose(m['hold_omega_tv'], 3.5 / 0.75)
+    assert math.isclose(m['hold_omega_saturated'], 2.0 / 3.0)
     # Steer steps 0.5 rad over 0.5 s (1 rad/s) and 0.1 rad over 0.25 s (0.4 rad/s).
-    assert math.isclose(m["hold_steer_rate_max"], 1.0)
-    assert m["hold_steer_joint_rate_max"] == 0.7
+    assert math.isclose(m['hold_steer_rate_max'], 1.0)
+    assert m['hold_steer_joint_rate_max'] == 0.7
 
 
 def test_hold_metrics_are_none_outside_the_window_and_without_inputs():
     t, distance, theta_e, omega, dt, saturated, steer, joint = _hold_case()
     empty = hold_metrics(t, distance, theta_e, omega, dt, 10.0, saturated, steer, joint)
-    assert empty["hold_from"] == 10.0
-    assert all(v is None for k, v in empty.items() if k != "hold_from")
+    assert empty['hold_from'] == 10.0
+    assert all(v is None for k, v in empty.items() if k != 'hold_from')
     bare = hold_metrics(t, distance, [math.nan] * 5, omega, dt, 2.0)
-    assert bare["hold_distance_max"] == 3.0
-    for key in ("hold_theta_e_p99", "hold_theta_e_max", "hold_omega_saturated",
-                "hold_steer_rate_max", "hold_steer_joint_rate_max"):
+    assert bare['hold_distance_max'] == 3.0
+    for key in ('hold_theta_e_p99', 'hold_theta_e_max', 'hold_omega_saturated',
+                'hold_steer_rate_max', 'hold_steer_joint_rate_max'):
         assert bare[key] is None, key
     # One sample in the window: no steer rate.
     last = hold_metrics(t, distance, theta_e, omega, dt, 4.0, saturated, steer, joint)
-    assert last["hold_steer_rate_max"] is None and last["hold_distance_max"] == 2.0
-    assert last["hold_omega_tv"] == 0.0
+    assert last['hold_steer_rate_max'] is None and last['hold_distance_max'] == 2.0
+    assert last['hold_omega_tv'] == 0.0
 
 
 def test_tracking_metrics_of_a_hand_made_run():
@@ -211,7 +220,7 @@ def test_tracking_metrics_of_a_hand_made_run():
     assert math.isclose(m.omega_tv_after_conv, (2.0 + 1.5) / 2.0)
     assert m.hold_from == 3.0 and m.hold_distance_max == 0.0
     assert m.hold_omega_saturated == 0.5 and math.isclose(m.hold_omega_tv, 1.5)
-    assert m.as_dict()["t_conv"] == 2.0 and m.as_dict()["hold_from"] == 3.0
+    assert m.as_dict()['t_conv'] == 2.0 and m.as_dict()['hold_from'] == 3.0
 
 
 def test_tracking_metrics_of_a_run_that_never_settles():
@@ -234,7 +243,7 @@ def test_total_variation_rate_and_sample_durations():
 
 # --- the slopes of the robot profile's analytic thetadot_d ---------------------------------
 
-@pytest.mark.parametrize("e", [0.5, -0.5, 0.05, 0.9])
+@pytest.mark.parametrize('e', [0.5, -0.5, 0.05, 0.9])
 def test_bounded_rate_slope_is_the_derivative_of_eq_33(e):
     xi, r = 1.0, 0.5
     a = abs(e)
@@ -265,7 +274,7 @@ def test_bounded_rate_slope_zones():
     assert math.isclose(bounded_rate_slope(e, xi, r, d), by_hand, rel_tol=1e-12)
 
 
-@pytest.mark.parametrize("s", [0.3, -0.3, 2.0, -0.01])
+@pytest.mark.parametrize('s', [0.3, -0.3, 2.0, -0.01])
 def test_reaching_term_slope_is_the_derivative_of_g(s):
     r, h = 0.5, 2.0
     a = abs(s)
@@ -286,13 +295,13 @@ def _session(**kw):
 
 def _feed(s, x, y, stamp, wall=None):
     wall = stamp if wall is None else wall
-    accepted = s.on_odometry(x, y, 0.0, wall, stamp, stamp, "odom")
+    accepted = s.on_odometry(x, y, 0.0, wall, stamp, stamp, 'odom')
     return accepted, s.tick(stamp, wall)
 
 
-@pytest.mark.parametrize("bad", [0, -1, True, 1.5, "3"])
+@pytest.mark.parametrize('bad', [0, -1, True, 1.5, '3'])
 def test_confirm_messages_must_be_an_integer_of_at_least_one(bad):
-    with pytest.raises(ValueError, match="confirm_messages"):
+    with pytest.raises(ValueError, match='confirm_messages'):
         _session(confirm_messages=bad)
 
 
@@ -309,12 +318,12 @@ def test_restart_threshold_defaults_to_one_second_and_bounds_out_of_order():
         _feed(s, 1.0, 4.0, stamp)
     # 0.875 s back: out of order (ignored); 1 s back (the threshold itself) and beyond: off
     # the time base, so the message is taken and stops the robot.
-    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.125, "odom") is False
-    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.0, "odom") is True
+    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.125, 'odom') is False
+    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.0, 'odom') is True
     assert s.tick(3.001, 3.001).stopped
     s = _session()
     _feed(s, 1.0, 4.0, 2.0)
-    assert s.on_odometry(1.0, 4.0, 0.0, 2.001, 2.001, 0.5, "odom") is True  # 1.5 s back
+    assert s.on_odometry(1.0, 4.0, 0.0, 2.001, 2.001, 0.5, 'odom') is True  # 1.5 s back
 
 
 def test_a_repeated_stamp_is_not_out_of_order():
@@ -330,7 +339,7 @@ def test_jump_limit_is_inclusive_and_counts_both_axes():
     _feed(s, 1.0, 4.0, 0.0)
     assert not _feed(s, 1.0, 5.0, 0.001)[1].stopped  # exactly 1 m along y: accepted
     out = _feed(s, 1.0, 6.5, 0.002)[1]  # 1.5 m along y only
-    assert out.stopped and "jumped 1.50 m" in out.report
+    assert out.stopped and 'jumped 1.50 m' in out.report
 
 
 def test_stale_odometry_is_reported_once_while_it_lasts():
@@ -344,13 +353,13 @@ def test_stale_odometry_is_reported_once_while_it_lasts():
 
 def test_the_session_integrates_over_the_measured_step():
     # Ticks 2 ms apart: the controller must see dt = 2 ms, as a controller stepped by hand.
-    from nfmr_dlsmc.dlsmc import DlsmcController
+    from nfmr_dlsmc.core.dlsmc import DlsmcController
     params = ControllerParams()
     s = TrackingSession(params, odom_timeout=0.1)
     ref = DlsmcController(params.dlsmc)
     traj = params.trajectory
     for k, t in enumerate((0.0, 0.002, 0.004)):
-        s.on_odometry(1.0, 4.0, 0.0, t, t, t, "odom")
+        s.on_odometry(1.0, 4.0, 0.0, t, t, t, 'odom')
         out = s.tick(t, t)
         x_d, y_d, xdot_d, ydot_d = (float(v) for v in traj.sample(t))
         xddot_d, yddot_d = (float(v) for v in traj.acceleration(t))
@@ -358,7 +367,7 @@ def test_the_session_integrates_over_the_measured_step():
                             xddot_d, yddot_d)
         assert (out.v, out.omega) == (v, omega)
     # A tick 0.5 s after the previous (> 100 periods) falls back to the nominal period.
-    s.on_odometry(1.0, 4.0, 0.0, 0.504, 0.504, 0.504, "odom")
+    s.on_odometry(1.0, 4.0, 0.0, 0.504, 0.504, 0.504, 'odom')
     out = s.tick(0.504, 0.504)
     x_d, y_d, xdot_d, ydot_d = (float(v) for v in traj.sample(0.504))
     xddot_d, yddot_d = (float(v) for v in traj.acceleration(0.504))
@@ -370,54 +379,53 @@ def test_the_session_integrates_over_the_measured_step():
 
 def test_bag_metadata_has_the_rosbag2_version_9_layout(tmp_path):
     from mcap.reader import make_reader
-
-    from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
-    directory = tmp_path / "nested" / "run"  # parents are created
+    from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+    directory = tmp_path / 'nested' / 'run'  # parents are created
     with BagWriter(directory) as writer:
-        writer.add_topic("/a", "std_msgs/msg/Float64MultiArray", [QosProfile(depth=7)])
-        writer.add_topic("/b", "std_msgs/msg/Float64MultiArray",
-                         [{"history": "keep_all", "depth": 0}])
+        writer.add_topic('/a', 'std_msgs/msg/Float64MultiArray', [QosProfile(depth=7)])
+        writer.add_topic('/b', 'std_msgs/msg/Float64MultiArray',
+                         [{'history': 'keep_all', 'depth': 0}])
         for k, t in enumerate((3_000, 1_000, 2_000)):
-            writer.write("/a", t, b"\x00\x01\x00\x00" + bytes(8), publish_time_ns=None if k else 42)
-        writer.write("/b", 5_000, b"\x00\x01\x00\x00" + bytes(8))
-    info = yaml.safe_load((directory / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert list(info) == ["version", "storage_identifier", "duration", "starting_time",
-                          "message_count", "topics_with_message_count", "compression_format",
-                          "compression_mode", "relative_file_paths", "files", "custom_data",
-                          "ros_distro"]  # rosbag2's own order
-    assert info["compression_format"] == "" and info["compression_mode"] == ""
-    assert info["custom_data"] is None and info["ros_distro"] == "jazzy"
-    assert info["starting_time"] == {"nanoseconds_since_epoch": 1_000}
-    assert info["duration"] == {"nanoseconds": 4_000} and info["message_count"] == 4
-    assert info["files"] == [{"path": "run_0.mcap",
-                              "starting_time": {"nanoseconds_since_epoch": 1_000},
-                              "duration": {"nanoseconds": 4_000}, "message_count": 4}]
-    qos_a = info["topics_with_message_count"][0]["topic_metadata"]["offered_qos_profiles"][0]
-    assert list(qos_a) == ["history", "depth", "reliability", "durability", "deadline",
-                           "lifespan", "liveliness", "liveliness_lease_duration",
-                           "avoid_ros_namespace_conventions"]
-    assert qos_a["depth"] == 7 and qos_a["deadline"] == {"sec": 9223372036, "nsec": 854775807}
-    qos_b = info["topics_with_message_count"][1]["topic_metadata"]["offered_qos_profiles"]
-    assert qos_b == [{"history": "keep_all", "depth": 0}]
-    with open(directory / "run_0.mcap", "rb") as f:
+            writer.write('/a', t, b'\x00\x01\x00\x00' + bytes(8), publish_time_ns=None if k else 42)
+        writer.write('/b', 5_000, b'\x00\x01\x00\x00' + bytes(8))
+    info = yaml.safe_load((directory / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert list(info) == ['version', 'storage_identifier', 'duration', 'starting_time',
+                          'message_count', 'topics_with_message_count', 'compression_format',
+                          'compression_mode', 'relative_file_paths', 'files', 'custom_data',
+                          'ros_distro']  # rosbag2's own order
+    assert info['compression_format'] == '' and info['compression_mode'] == ''
+    assert info['custom_data'] is None and info['ros_distro'] == 'jazzy'
+    assert info['starting_time'] == {'nanoseconds_since_epoch': 1_000}
+    assert info['duration'] == {'nanoseconds': 4_000} and info['message_count'] == 4
+    assert info['files'] == [{'path': 'run_0.mcap',
+                              'starting_time': {'nanoseconds_since_epoch': 1_000},
+                              'duration': {'nanoseconds': 4_000}, 'message_count': 4}]
+    qos_a = info['topics_with_message_count'][0]['topic_metadata']['offered_qos_profiles'][0]
+    assert list(qos_a) == ['history', 'depth', 'reliability', 'durability', 'deadline',
+                           'lifespan', 'liveliness', 'liveliness_lease_duration',
+                           'avoid_ros_namespace_conventions']
+    assert qos_a['depth'] == 7 and qos_a['deadline'] == {'sec': 9223372036, 'nsec': 854775807}
+    qos_b = info['topics_with_message_count'][1]['topic_metadata']['offered_qos_profiles']
+    assert qos_b == [{'history': 'keep_all', 'depth': 0}]
+    with open(directory / 'run_0.mcap', 'rb') as f:
         reader = make_reader(f)
-        assert reader.get_header().library == "nfmr"
+        assert reader.get_header().library == 'nfmr'
         records = [(c.topic, m.sequence, m.log_time, m.publish_time)
                    for _, c, m in reader.iter_messages(log_time_order=False)]
         # The mcap summary carries the rosbag2 record with the same, unsorted, metadata.
-        rosbag2 = {r.name: r.metadata for r in reader.iter_metadata()}["rosbag2"]
-    assert records == [("/a", 0, 3_000, 42), ("/a", 1, 1_000, 1_000), ("/a", 2, 2_000, 2_000),
-                       ("/b", 0, 5_000, 5_000)]
-    assert rosbag2["ROS_DISTRO"] == "jazzy"
-    assert list(yaml.safe_load(rosbag2["serialized_metadata"]))[:3] == [
-        "version", "storage_identifier", "duration"]
+        rosbag2 = {r.name: r.metadata for r in reader.iter_metadata()}['rosbag2']
+    assert records == [('/a', 0, 3_000, 42), ('/a', 1, 1_000, 1_000), ('/a', 2, 2_000, 2_000),
+                       ('/b', 0, 5_000, 5_000)]
+    assert rosbag2['ROS_DISTRO'] == 'jazzy'
+    assert list(yaml.safe_load(rosbag2['serialized_metadata']))[:3] == [
+        'version', 'storage_identifier', 'duration']
 
 
 def test_a_bag_of_one_message_lasts_zero_nanoseconds(tmp_path):
-    from nfmr_dlsmc.bag_writer import BagWriter, QosProfile
-    with BagWriter(tmp_path / "one") as writer:
-        writer.add_topic("/a", "std_msgs/msg/Float64MultiArray", [QosProfile()])
-        writer.write("/a", 7_000, b"\x00\x01\x00\x00" + bytes(8))
-    info = yaml.safe_load((tmp_path / "one" / "metadata.yaml").read_text())
-    assert info["rosbag2_bagfile_information"]["duration"] == {"nanoseconds": 0}
-    assert not (tmp_path / "one" / "metadata.yaml.tmp").exists()
+    from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+    with BagWriter(tmp_path / 'one') as writer:
+        writer.add_topic('/a', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
+        writer.write('/a', 7_000, b'\x00\x01\x00\x00' + bytes(8))
+    info = yaml.safe_load((tmp_path / 'one' / 'metadata.yaml').read_text())
+    assert info['rosbag2_bagfile_information']['duration'] == {'nanoseconds': 0}
+    assert not (tmp_path / 'one' / 'metadata.yaml.tmp').exists()

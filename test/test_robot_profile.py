@@ -1,28 +1,33 @@
-"""The robot profile's four options against hand-computed values, and its closed loop on the
-kinematic model (the pybullet loop is in test_pybullet_plant.py)."""
+"""
+The robot profile's four options against hand-computed values, and its closed loop on the
+kinematic model (the pybullet loop is in test_pybullet_plant.py).
+"""
 
 import math
 
+from nfmr_dlsmc.core.disturbances import paper_disturbance
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
+from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop, BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
+from nfmr_dlsmc.core.sliding_functions import (
+    bounded_rate,
+    bounded_rate_slope,
+    reaching_term,
+    reaching_term_slope,
+)
+from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.plants.batch import simulate_batch
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
-from nfmr_dlsmc.batch_sim import simulate_batch
-from nfmr_dlsmc.disturbances import paper_disturbance
-from nfmr_dlsmc.dlsmc import DlsmcController
-from nfmr_dlsmc.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
-from nfmr_dlsmc.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE, AbfsmcInnerLoop
-from nfmr_dlsmc.kinematic_sim import simulate
-from nfmr_dlsmc.metrics import simulation_metrics
-from nfmr_dlsmc.outer_loop import BtintsmcOuterLoop
-from nfmr_dlsmc.params import controller_params, load_params_file
-from nfmr_dlsmc.sliding_functions import (bounded_rate, bounded_rate_slope, reaching_term,
-                                          reaching_term_slope)
-from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory
-from nfmr_dlsmc.validation import ParameterError
-
 DT = 0.001
 R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
-ROBOT_FILE = "config/robot_case1.yaml"
+ROBOT_FILE = 'config/robot_case1.yaml'
 
 
 def robot_params():
@@ -51,7 +56,7 @@ def test_linear_zone_is_the_chord_and_meets_the_curve_at_its_edge():
     assert bounded_rate(1e-6, xi, R2, 0.0) == math.sin(0.5 * math.pi * (1e-6 / xi) ** R2)
 
 
-@pytest.mark.parametrize("e", [-0.4, -0.1, -0.021, -0.01, 0.004, 0.05, 0.3, 0.49, 0.6])
+@pytest.mark.parametrize('e', [-0.4, -0.1, -0.021, -0.01, 0.004, 0.05, 0.3, 0.49, 0.6])
 def test_alpha_slope_matches_a_central_difference(e):
     d, xi, h = 0.02, 0.5, 1e-7
     numeric = (bounded_rate(e + h, xi, R2, d) - bounded_rate(e - h, xi, R2, d)) / (2 * h)
@@ -63,7 +68,7 @@ def test_paper_alpha_slope_is_infinite_at_zero():
     assert bounded_rate_slope(1e-9, 0.5, R2, 0.0) > 1e3
 
 
-@pytest.mark.parametrize("s", [-1.0, -0.05, -1e-4, 2e-3, 0.3, 2.0])
+@pytest.mark.parametrize('s', [-1.0, -0.05, -1e-4, 2e-3, 0.3, 2.0])
 def test_reaching_term_slope_matches_a_central_difference(s):
     h = 1e-8
     numeric = (reaching_term(s + h, R3, 2.0) - reaching_term(s - h, R3, 2.0)) / (2 * h)
@@ -116,20 +121,20 @@ def test_eta_cap_stops_the_integral_phase_and_leaves_the_barrier():
 
 
 def test_profile_options_are_validated_with_their_names():
-    with pytest.raises(ParameterError, match=r"outer.linear_zone = 0.5 m: must be < outer.xi"):
+    with pytest.raises(ParameterError, match=r'outer.linear_zone = 0.5 m: must be < outer.xi'):
         OuterLoopGains(linear_zone=0.5)
-    with pytest.raises(ParameterError, match=r"outer.linear_zone = -0.1 m: must be >= 0"):
+    with pytest.raises(ParameterError, match=r'outer.linear_zone = -0.1 m: must be >= 0'):
         OuterLoopGains(linear_zone=-0.1)
-    with pytest.raises(ParameterError, match=r"inner.boundary_layer = nan rad"):
+    with pytest.raises(ParameterError, match=r'inner.boundary_layer = nan rad'):
         InnerLoopGains(boundary_layer=math.nan)
-    with pytest.raises(ParameterError, match=r"inner.eta_max = -1 rad/s: must be >= 0"):
+    with pytest.raises(ParameterError, match=r'inner.eta_max = -1 rad/s: must be >= 0'):
         InnerLoopGains(eta_max=-1)
     with pytest.raises(ParameterError, match=r"thetadot_source = 'model': must be one of"):
-        DlsmcConfig(thetadot_source="model")
-    with pytest.raises(ParameterError, match=r"thetadot_filter = 0.02 s: must be 0 with"):
-        DlsmcConfig(thetadot_source="analytic", thetadot_filter=0.02)
+        DlsmcConfig(thetadot_source='model')
+    with pytest.raises(ParameterError, match=r'thetadot_filter = 0.02 s: must be 0 with'):
+        DlsmcConfig(thetadot_source='analytic', thetadot_filter=0.02)
     with pytest.raises(ParameterError, match="batch simulator implements the paper's law only"):
-        simulate_batch(robot_params().dlsmc, make_trajectory("sine"), [(1.0, 4.0, 0.0)], 1.0)
+        simulate_batch(robot_params().dlsmc, make_trajectory('sine'), [(1.0, 4.0, 0.0)], 1.0)
 
 
 # -- the analytic thetadot_d ------------------------------------------------------------
@@ -165,9 +170,9 @@ def test_input_rate_is_the_time_derivative_of_the_outer_law():
 def test_analytic_thetadot_d_matches_the_rate_of_theta_d_in_closed_loop():
     params = robot_params()
     run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 4.0, 0.0), 30.0)
-    theta_d = np.unwrap(run.telemetry["theta_d"])
+    theta_d = np.unwrap(run.telemetry['theta_d'])
     numeric = np.gradient(theta_d, DT)
-    analytic = run.telemetry["thetadot_d"]
+    analytic = run.telemetry['thetadot_d']
     window = run.t >= 10.0  # converged and smooth
     np.testing.assert_allclose(analytic[window][1:-1], numeric[window][1:-1], atol=2e-3)
     assert np.ptp(analytic[window]) > 0.1  # the sine makes theta_d turn
@@ -189,13 +194,13 @@ def test_robot_profile_meets_its_kinematic_targets_in_case1():
 
 def test_paper_law_chatters_where_the_profile_does_not():
     # The same start on the paper's law: omega alternates limit to limit once converged.
-    m = simulation_metrics(simulate(DlsmcController(), make_trajectory("sine"),
+    m = simulation_metrics(simulate(DlsmcController(), make_trajectory('sine'),
                                     (1.0, 4.0, 0.0), 30.0))
     assert m.hold_omega_tv > 100.0 and m.hold_omega_saturated > 0.1
 
 
-@pytest.mark.parametrize("name, x0", [("circle", (0.5, -0.5, 0.0)), ("line", (-1.0, 1.0, 1.0)),
-                                      ("lemniscate", (1.0, -1.0, 0.5)), ("sine", (4.0, 1.0, 0.0))])
+@pytest.mark.parametrize('name, x0', [('circle', (0.5, -0.5, 0.0)), ('line', (-1.0, 1.0, 1.0)),
+                                      ('lemniscate', (1.0, -1.0, 0.5)), ('sine', (4.0, 1.0, 0.0))])
 def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
     params = robot_params()
     assert name in TRAJECTORY_TYPES
@@ -212,7 +217,7 @@ def test_robot_profile_holds_the_band_through_the_case2_pulse_on_the_kinematic_m
     run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 1.0, math.pi / 6),
                    100.0, disturbance=paper_disturbance())
     after_return = run.t >= 20.0  # the return ends at ~9 s (1 cm), the tail by ~15 s (1 mm)
-    theta_e = np.abs(run.telemetry["theta_e"])
+    theta_e = np.abs(run.telemetry['theta_e'])
     assert theta_e[after_return].max() <= 0.01  # eps, the 50 s pulse included
     assert np.abs(run.omega[after_return]).max() < 1.59
     late = run.t >= 51.5  # 1 s after the pulse ended

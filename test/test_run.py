@@ -1,41 +1,40 @@
 """nfmr-run end to end: two node processes, real DDS, a recorded bag read three ways."""
 
+from pathlib import Path
 import re
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
-
-import pytest
-import yaml
-from mcap.reader import make_reader
-from mcap_ros2.decoder import DecoderFactory
-from rclpy.serialization import deserialize_message
-from rosbags.rosbag2 import Reader
-from rosbags.typesys import Stores, get_typestore
 
 from decoding import plain
-from nfmr_dlsmc.recorder_node import message_class
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from nfmr_dlsmc.ros.recorder_node import message_class
+import pytest
+from rclpy.serialization import deserialize_message
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import get_typestore, Stores
+import yaml
 
-RUN = str(Path(sys.executable).parent / "nfmr-run")
+RUN = str(Path(sys.executable).parent / 'nfmr-run')
 
 
 def start_run(tmp_path, *args):
-    return subprocess.Popen([RUN, "--out", str(tmp_path), *args], stdout=subprocess.PIPE,
+    return subprocess.Popen([RUN, '--out', str(tmp_path), *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, cwd=Path(__file__).parents[1])
 
 
 def children_of(pid):
-    out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
+    out = subprocess.run(['pgrep', '-P', str(pid)], capture_output=True, text=True).stdout
     return [int(p) for p in out.split()]
 
 
 def cmdline(pid):
     try:
-        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        return Path(f'/proc/{pid}/cmdline').read_bytes().replace(b'\0', b' ').decode()
     except OSError:
-        return ""
+        return ''
 
 
 def wait_for_child(proc, marker, timeout=60.0):
@@ -46,13 +45,13 @@ def wait_for_child(proc, marker, timeout=60.0):
             if marker in cmdline(pid):
                 return pid
         time.sleep(0.1)
-    raise AssertionError(f"no child running {marker}")
+    raise AssertionError(f'no child running {marker}')
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def short_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("runs")
-    proc = start_run(out, "--duration", "3")
+    out = tmp_path_factory.mktemp('runs')
+    proc = start_run(out, '--duration', '3')
     stdout, stderr = proc.communicate(timeout=300)
     return proc.returncode, stdout, stderr
 
@@ -62,41 +61,41 @@ def test_run_prints_metrics_and_ends_with_the_bag_path(short_run):
     assert code == 0, stderr
     lines = stdout.strip().splitlines()
     bag = Path(lines[-1])
-    assert bag.name == "bag" and (bag / "metadata.yaml").is_file()
-    assert any(line.startswith("IAE of distance") for line in lines)
-    assert "pybullet" in stdout and "kinematic" in stdout
-    for plot in ("trajectory.png", "errors.png", "inputs.png"):
+    assert bag.name == 'bag' and (bag / 'metadata.yaml').is_file()
+    assert any(line.startswith('IAE of distance') for line in lines)
+    assert 'pybullet' in stdout and 'kinematic' in stdout
+    for plot in ('trajectory.png', 'errors.png', 'inputs.png'):
         assert (bag.parent / plot).stat().st_size > 10_000
-    assert "real-time factor" in stderr
+    assert 'real-time factor' in stderr
 
 
 def test_lockstep_records_every_step_and_every_reply(short_run):
     bag = Path(short_run[1].strip().splitlines()[-1])
-    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    counts = {t["topic_metadata"]["name"]: t["message_count"]
-              for t in info["topics_with_message_count"]}
+    info = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    counts = {t['topic_metadata']['name']: t['message_count']
+              for t in info['topics_with_message_count']}
     # The sim stops stepping at exactly --duration: steps 0 ... 3000 of 1 ms.
-    assert counts["/clock"] == counts["/odom"] == 3001
+    assert counts['/clock'] == counts['/odom'] == 3001
     # One command per odometry message; extra replies come only from the safety stop after
     # the sim was shut down, and those are marked as stopped.
-    with (bag / "bag_0.mcap").open("rb") as stream:
-        states = [deserialize_message(m.data, message_class("std_msgs/msg/Float64MultiArray"))
-                  for _, _, m in make_reader(stream).iter_messages(topics=["/controller_state"])]
-    labels = states[0].layout.dim[0].label.split(",")
-    stopped = sum(s.data[labels.index("stopped")] for s in states)
-    assert len(states) - stopped == counts["/odom"]
+    with (bag / 'bag_0.mcap').open('rb') as stream:
+        states = [deserialize_message(m.data, message_class('std_msgs/msg/Float64MultiArray'))
+                  for _, _, m in make_reader(stream).iter_messages(topics=['/controller_state'])]
+    labels = states[0].layout.dim[0].label.split(',')
+    stopped = sum(s.data[labels.index('stopped')] for s in states)
+    assert len(states) - stopped == counts['/odom']
     # Each command topic holds every reply too; after the sim stopped, the controller's
     # safety stops keep coming until it is shut down, and the very last of those may be
     # cut off by its exit, so only the replies to odometry are counted exactly.
-    for topic in ("/cmd_vel", "/steer_position_controller/commands",
-                  "/wheel_velocity_controller/commands"):
-        assert counts["/odom"] <= counts[topic] <= len(states) + 1
+    for topic in ('/cmd_vel', '/steer_position_controller/commands',
+                  '/wheel_velocity_controller/commands'):
+        assert counts['/odom'] <= counts[topic] <= len(states) + 1
 
 
 def test_three_readers_agree_on_every_message(short_run):
     bag = Path(short_run[1].strip().splitlines()[-1])
     store = get_typestore(Stores.ROS2_JAZZY)
-    with (bag / "bag_0.mcap").open("rb") as stream:
+    with (bag / 'bag_0.mcap').open('rb') as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         via_mcap_ros2 = [(channel.topic, message.log_time, plain(decoded))
                          for _, channel, message, decoded in reader.iter_decoded_messages()]
@@ -111,15 +110,15 @@ def test_three_readers_agree_on_every_message(short_run):
 
 
 def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
-    proc = start_run(tmp_path, "--duration", "60")
-    kids = [wait_for_child(proc, "nfmr_sim.sim_node"),
-            wait_for_child(proc, "nfmr_dlsmc.controller_node")]
+    proc = start_run(tmp_path, '--duration', '60')
+    kids = [wait_for_child(proc, 'nfmr_sim.ros.sim_node'),
+            wait_for_child(proc, 'nfmr_dlsmc.ros.controller_node')]
     time.sleep(3.0)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=30)
     assert proc.returncode == 130
     for pid in kids:
-        assert not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2]
+        assert not Path(f'/proc/{pid}').exists() or 'Z' in Path(f'/proc/{pid}/stat').read_text().split()[2]
     bag = Path(stdout.strip().splitlines()[-1])
     with Reader(bag) as reader:
         assert reader.message_count > 0
@@ -131,16 +130,16 @@ def table_columns(text: str, labels) -> dict:
     for line in text.splitlines():
         for label in labels:
             if line.startswith(label):
-                rows[label] = re.split(r"\s{2,}", line.strip())[1:]
+                rows[label] = re.split(r'\s{2,}', line.strip())[1:]
     return rows
 
 
 def test_analyze_gives_the_metrics_the_launcher_printed(short_run):
     stdout = short_run[1]
     bag = Path(stdout.strip().splitlines()[-1])
-    labels = ("IAE of distance", "ISE of distance", "STD of distance", "final distance")
+    labels = ('IAE of distance', 'ISE of distance', 'STD of distance', 'final distance')
     printed = {k: cells[0] for k, cells in table_columns(stdout, labels).items()}  # ROS column
-    proc = subprocess.run([str(Path(sys.executable).parent / "nfmr-analyze"), str(bag)],
+    proc = subprocess.run([str(Path(sys.executable).parent / 'nfmr-analyze'), str(bag)],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     analyzed = {k: cells[0] for k, cells in table_columns(proc.stdout, labels).items()}
@@ -153,42 +152,41 @@ def test_the_ros_run_agrees_with_the_same_run_in_one_process(short_run):
     # equal to the last bit for the first steps, then rounding (the pose crosses a
     # quaternion, the step length a stamp difference) grows through the tyre contacts
     # while omega is saturated during the return: millimetres after 1 s.
-    rows = table_columns(short_run[1], ("IAE of distance", "ISE of distance"))
+    rows = table_columns(short_run[1], ('IAE of distance', 'ISE of distance'))
     (ros_iae, in_process_iae, _), (ros_ise, in_process_ise, _) = rows.values()
     assert float(ros_iae) == pytest.approx(float(in_process_iae), rel=0.01)
     assert float(ros_ise) == pytest.approx(float(in_process_ise), rel=0.02)
 
 
-@pytest.mark.parametrize("section, text, needle", [
-    ("sim", "steering: {j1: 0.0, j2: 1.0}",
-     "controller steering (j1, j2) = (1, 0) but sim steering (j1, j2) = (0, 1)"),
-    ("sim", "chassis: {wheelbase: 1.2}",
-     "controller geometry.wheelbase = 0.89 m but sim chassis.wheelbase = 1.2 m"),
+@pytest.mark.parametrize('section, text, needle', [
+    ('sim', 'steering: {j1: 0.0, j2: 1.0}',
+     'controller steering (j1, j2) = (1, 0) but sim steering (j1, j2) = (0, 1)'),
+    ('sim', 'chassis: {wheelbase: 1.2}',
+     'controller geometry.wheelbase = 0.89 m but sim chassis.wheelbase = 1.2 m'),
 ])
 def test_a_controller_and_sim_for_different_robots_are_refused_before_starting(
         tmp_path, section, text, needle):
-    base = (Path(__file__).parents[1] / "config" / "robot_case1.yaml").read_text()
-    config = tmp_path / "mismatch.yaml"
-    config.write_text(base + f"\n/{section}:\n  ros__parameters:\n    {text}\n")
+    base = (Path(__file__).parents[1] / 'config' / 'robot_case1.yaml').read_text()
+    config = tmp_path / 'mismatch.yaml'
+    config.write_text(base + f'\n/{section}:\n  ros__parameters:\n    {text}\n')
     proc = start_run(tmp_path, str(config))
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 2 and needle in stderr, stderr
-    assert not (tmp_path / "runs").exists() and not list(tmp_path.glob("*_mismatch"))
+    assert not (tmp_path / 'runs').exists() and not list(tmp_path.glob('*_mismatch'))
 
 
 def test_a_run_that_reaches_its_duration_ends_cleanly(short_run):
     # No safety stop at the end, and the loop reported healthy throughout (in lockstep the
     # tick periods count on the odometry stamps, not the wall clock).
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-
-    from nfmr_dlsmc.bag_reader import read_bag
+    from nfmr_dlsmc.bag.reader import read_bag
 
     code, stdout, _ = short_run
-    assert code == 0 and "(0 stopped by safety)" in stdout
+    assert code == 0 and '(0 stopped by safety)' in stdout
     bag = Path(stdout.strip().splitlines()[-1])
-    assert "stopping the robot" not in (bag.parent / "controller.log").read_text()
+    assert 'stopping the robot' not in (bag.parent / 'controller.log').read_text()
     diagnostics = [deserialize_message(m.data, DiagnosticArray)
-                   for m in read_bag(bag, topics=["/diagnostics"]).messages]
+                   for m in read_bag(bag, topics=['/diagnostics']).messages]
     assert len(diagnostics) >= 2
     levels = [s.level for d in diagnostics for s in d.status]
     assert levels and all(level == DiagnosticStatus.OK for level in levels), levels

@@ -4,12 +4,15 @@ import math
 import threading
 import time
 
-import numpy as np
-import pytest
-import rclpy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_sim.ros.sim_node import LIVE_PARAMETERS, SimNode
+from nfmr_sim.sim_params import sim_parameter_defaults
+import numpy as np
+import pytest
 from rcl_interfaces.msg import Log
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -18,10 +21,6 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
-
-from nfmr_dlsmc.validation import ParameterError
-from nfmr_sim.sim_node import LIVE_PARAMETERS, SimNode
-from nfmr_sim.sim_params import sim_parameter_defaults
 
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # /rosout keeps its latest messages for late joiners (transient local): so do we.
@@ -32,16 +31,16 @@ class Driver(Node):
     """Test peer: records what the sim publishes and sends it commands."""
 
     def __init__(self, context):
-        super().__init__("driver", context=context)
+        super().__init__('driver', context=context)
         self.odom, self.clock, self.joints, self.logs = [], [], [], []
         self.new_odom = threading.Condition()
-        self.create_subscription(Odometry, "odom", self._on_odom, QOS)
-        self.create_subscription(Clock, "/clock", self.clock.append, QOS)
-        self.create_subscription(JointState, "joint_states", self.joints.append, QOS)
-        self.create_subscription(Log, "/rosout", self._on_log, ROSOUT_QOS)
-        self.steer = self.create_publisher(Float64MultiArray, "steer_position_controller/commands", QOS)
-        self.wheels = self.create_publisher(Float64MultiArray, "wheel_velocity_controller/commands", QOS)
-        self.twist = self.create_publisher(Twist, "cmd_vel", QOS)
+        self.create_subscription(Odometry, 'odom', self._on_odom, QOS)
+        self.create_subscription(Clock, '/clock', self.clock.append, QOS)
+        self.create_subscription(JointState, 'joint_states', self.joints.append, QOS)
+        self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
+        self.steer = self.create_publisher(Float64MultiArray, 'steer_position_controller/commands', QOS)
+        self.wheels = self.create_publisher(Float64MultiArray, 'wheel_velocity_controller/commands', QOS)
+        self.twist = self.create_publisher(Twist, 'cmd_vel', QOS)
 
     def _on_odom(self, msg):
         with self.new_odom:
@@ -49,13 +48,13 @@ class Driver(Node):
             self.new_odom.notify_all()
 
     def _on_log(self, msg):
-        if msg.name == "sim":
+        if msg.name == 'sim':
             self.logs.append(msg.msg)
 
     def wait_odom(self, count, timeout=10.0):
         with self.new_odom:
             assert self.new_odom.wait_for(lambda: len(self.odom) >= count, timeout), \
-                f"only {len(self.odom)} odometry messages"
+                f'only {len(self.odom)} odometry messages'
 
     def send(self, steer, wheels):
         self.steer.publish(Float64MultiArray(data=list(steer)))
@@ -99,8 +98,8 @@ def start(context, **overrides):
     executor.spinner = spinner
     # Wait for discovery both ways before the sim starts stepping.
     deadline = time.monotonic() + 10.0
-    while (driver.count_publishers("odom") == 0 or sim.count_publishers(
-            "wheel_velocity_controller/commands") == 0) and time.monotonic() < deadline:
+    while (driver.count_publishers('odom') == 0 or sim.count_publishers(
+            'wheel_velocity_controller/commands') == 0) and time.monotonic() < deadline:
         time.sleep(0.01)
     sim.start()
     return sim, driver, executor
@@ -117,7 +116,7 @@ def stop(sim, driver, executor):
 def wait_for(predicate, timeout=10.0):
     deadline = time.monotonic() + timeout
     while not predicate():
-        assert time.monotonic() < deadline, "condition not met in time"
+        assert time.monotonic() < deadline, 'condition not met in time'
         time.sleep(0.01)
 
 
@@ -127,7 +126,7 @@ def test_lockstep_commands_in_odometry_out(ros_context):
         driver.wait_odom(1)
         driver.drive(1500, [0.0] * 4, [1.0 / 0.14] * 4)
         last = driver.odom[-1]
-        assert last.header.frame_id == "odom" and last.child_frame_id == "base_link"
+        assert last.header.frame_id == 'odom' and last.child_frame_id == 'base_link'
         assert last.twist.twist.linear.x == pytest.approx(1.0, abs=0.02)
         assert last.pose.pose.position.x > 0.8
         # Exactly one physics step per command: sim time = steps * 1 ms.
@@ -135,7 +134,7 @@ def test_lockstep_commands_in_odometry_out(ros_context):
         assert stamp == pytest.approx(sim.steps * 0.001, abs=1e-9)
         assert sim.steps == 1500
         wait_for(lambda: len(driver.clock) >= 1501 and len(driver.joints) >= 150)
-        assert list(driver.joints[-1].name[:2]) == ["front_left_steer", "front_right_steer"]
+        assert list(driver.joints[-1].name[:2]) == ['front_left_steer', 'front_right_steer']
     finally:
         stop(sim, driver, executor)
 
@@ -153,13 +152,13 @@ def test_cmd_vel_goes_through_the_steering_geometry(ros_context):
         stop(sim, driver, executor)
 
 
-@pytest.mark.parametrize("steer, wheels, reason", [
-    ([0.0] * 4, [7.0] * 3, "wheel_velocity_controller/commands: len(data) = 3: must be 4"),
-    ([0.0] * 4, [math.nan] * 4, "data[0] (front_left) = nan rad/s: must be finite, not NaN or inf"),
-    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, "steer_position_controller/commands: data[0] "
-                                          "(front_left) = inf rad: must be finite"),
-    ([0.0] * 4, [1e308] * 4, "data[0] (front_left) = 1e+308 rad/s: must be within +-50 rad/s "
-                             "(motors.max_wheel_speed)"),
+@pytest.mark.parametrize('steer, wheels, reason', [
+    ([0.0] * 4, [7.0] * 3, 'wheel_velocity_controller/commands: len(data) = 3: must be 4'),
+    ([0.0] * 4, [math.nan] * 4, 'data[0] (front_left) = nan rad/s: must be finite, not NaN or inf'),
+    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, 'steer_position_controller/commands: data[0] '
+                                          '(front_left) = inf rad: must be finite'),
+    ([0.0] * 4, [1e308] * 4, 'data[0] (front_left) = 1e+308 rad/s: must be within +-50 rad/s '
+                             '(motors.max_wheel_speed)'),
 ])
 def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reason):
     sim, driver, executor = start(ros_context, lockstep_timeout=0.005)
@@ -170,11 +169,11 @@ def test_bad_commands_brake_and_are_logged_once(ros_context, steer, wheels, reas
         driver.drive(1500, steer, wheels)  # keeps sending the bad command
         assert abs(driver.odom[-1].twist.twist.linear.x) < 0.05
         wait_for(lambda: any(reason in m for m in driver.logs))
-        braking = [m for m in driver.logs if m.startswith("braking: rejected")]
+        braking = [m for m in driver.logs if m.startswith('braking: rejected')]
         assert len(braking) == 1 and reason in braking[0]
         driver.drive(500, [0.0] * 4, [7.0] * 4)  # valid again: drives on
         assert driver.odom[-1].twist.twist.linear.x > 0.3
-        wait_for(lambda: any("resumed" in m for m in driver.logs))
+        wait_for(lambda: any('resumed' in m for m in driver.logs))
     finally:
         stop(sim, driver, executor)
 
@@ -190,12 +189,12 @@ def test_a_huge_cmd_vel_brakes_is_logged_once_and_the_sim_keeps_stepping(ros_con
         steps = sim.steps
         driver.wait_odom(len(driver.odom) + 100)  # stepping on by lockstep timeouts
         assert sim.steps >= steps + 90 and sim.failure is None  # (an odometry may lag its step)
-        wait_for(lambda: any("cmd_vel" in m for m in driver.logs))
-        braking = [m for m in driver.logs if m.startswith("braking: rejected cmd_vel")]
+        wait_for(lambda: any('cmd_vel' in m for m in driver.logs))
+        braking = [m for m in driver.logs if m.startswith('braking: rejected cmd_vel')]
         assert braking == [
-            "braking: rejected cmd_vel: (linear.x, linear.y, angular.z) = (1e+308, 0, 1e+308) "
-            "maps to front_left wheel speed = inf rad/s: must be within +-50 rad/s "
-            "(motors.max_wheel_speed)"]
+            'braking: rejected cmd_vel: (linear.x, linear.y, angular.z) = (1e+308, 0, 1e+308) '
+            'maps to front_left wheel speed = inf rad/s: must be within +-50 rad/s '
+            '(motors.max_wheel_speed)']
     finally:
         stop(sim, driver, executor)
 
@@ -207,21 +206,21 @@ def _set(client, name, value):
     return future.result().results[0]
 
 
-@pytest.mark.parametrize("name, value, reason", [
-    ("command_timeout", -1.0, "command_timeout = -1.0 s: must be > 0"),
-    ("disturbance.odom_position_noise", math.nan,
-     "disturbance.odom_position_noise = nan m: must be a finite number"),
-    ("disturbance.pulses", [1.0, 2.0], "disturbance.pulses = [1.0, 2.0]: must hold groups of 5"),
-    ("motors.max_wheel_speed", 0.0, "motors.max_wheel_speed = 0.0 rad/s: must be > 0"),
-    ("friction.lateral", math.nan, "friction.lateral = nan: read-only: restart the sim"),
-    ("physics_dt", 0.002, "physics_dt = 0.002: read-only: restart the sim"),
-    ("chassis.steer_limit", 1.0, "chassis.steer_limit = 1.0: read-only: restart the sim"),
+@pytest.mark.parametrize('name, value, reason', [
+    ('command_timeout', -1.0, 'command_timeout = -1.0 s: must be > 0'),
+    ('disturbance.odom_position_noise', math.nan,
+     'disturbance.odom_position_noise = nan m: must be a finite number'),
+    ('disturbance.pulses', [1.0, 2.0], 'disturbance.pulses = [1.0, 2.0]: must hold groups of 5'),
+    ('motors.max_wheel_speed', 0.0, 'motors.max_wheel_speed = 0.0 rad/s: must be > 0'),
+    ('friction.lateral', math.nan, 'friction.lateral = nan: read-only: restart the sim'),
+    ('physics_dt', 0.002, 'physics_dt = 0.002: read-only: restart the sim'),
+    ('chassis.steer_limit', 1.0, 'chassis.steer_limit = 1.0: read-only: restart the sim'),
 ])
 def test_live_parameter_changes_are_validated_and_read_only_ones_refused(
         ros_context, name, value, reason):
-    sim, driver, executor = start(ros_context, mode="realtime")
+    sim, driver, executor = start(ros_context, mode='realtime')
     try:
-        client = AsyncParameterClient(driver, "sim")
+        client = AsyncParameterClient(driver, 'sim')
         assert client.wait_for_services(timeout_sec=10.0)
         before = sim.settings
         result = _set(client, name, value)
@@ -236,13 +235,13 @@ def test_live_parameter_changes_are_validated_and_read_only_ones_refused(
 def test_valid_live_changes_apply_at_the_next_step(ros_context):
     sim, driver, executor = start(ros_context, lockstep_timeout=0.002)
     try:
-        client = AsyncParameterClient(driver, "sim")
+        client = AsyncParameterClient(driver, 'sim')
         assert client.wait_for_services(timeout_sec=10.0)
         driver.wait_odom(50)
         still = [m.pose.pose.position.x for m in driver.odom[-50:]]
         assert max(still) - min(still) < 1e-4
-        for name, value in (("disturbance.odom_position_noise", 0.01),
-                            ("command_timeout", 0.25), ("motors.max_wheel_speed", 5.0)):
+        for name, value in (('disturbance.odom_position_noise', 0.01),
+                            ('command_timeout', 0.25), ('motors.max_wheel_speed', 5.0)):
             assert _set(client, name, value).successful
         wait_for(lambda: sim.settings.max_wheel_speed == 5.0)
         assert sim.gate.timeout == 0.25 and sim.gate.max_wheel_speed == 5.0
@@ -252,16 +251,16 @@ def test_valid_live_changes_apply_at_the_next_step(ros_context):
         noisy = [m.pose.pose.position.x for m in driver.odom[n:]]
         assert 0.005 < float(np.std(noisy)) < 0.02
         driver.drive(5, [0.0] * 4, [7.0] * 4)  # beyond the new bound: rejected
-        wait_for(lambda: any("must be within +-5 rad/s (motors.max_wheel_speed)" in m
+        wait_for(lambda: any('must be within +-5 rad/s (motors.max_wheel_speed)' in m
                              for m in driver.logs))
     finally:
         stop(sim, driver, executor)
 
 
 def test_every_sim_parameter_is_described_over_dds(ros_context):
-    sim, driver, executor = start(ros_context, mode="realtime")
+    sim, driver, executor = start(ros_context, mode='realtime')
     try:
-        client = AsyncParameterClient(driver, "sim")
+        client = AsyncParameterClient(driver, 'sim')
         assert client.wait_for_services(timeout_sec=10.0)
         names = list(sim_parameter_defaults())
         future = client.describe_parameters(names)
@@ -283,24 +282,24 @@ def test_commands_that_stop_arriving_brake_the_robot(ros_context):
         n = len(driver.odom)
         driver.wait_odom(n + 2500, timeout=30.0)  # the sim goes on by lockstep timeouts
         assert abs(driver.odom[-1].twist.twist.linear.x) < 0.05
-        timeouts = [m for m in driver.logs if "no valid command" in m]
-        assert len(timeouts) == 1 and "timeout 0.1 s" in timeouts[0]
+        timeouts = [m for m in driver.logs if 'no valid command' in m]
+        assert len(timeouts) == 1 and 'timeout 0.1 s' in timeouts[0]
     finally:
         stop(sim, driver, executor)
 
 
 def test_invalid_parameters_stop_the_node(ros_context):
     with pytest.raises(ParameterError, match="mode = 'fast'"):
-        SimNode(context=ros_context, parameter_overrides=[Parameter("mode", value="fast")])
-    with pytest.raises(ParameterError, match="unknown parameter"):
-        SimNode(context=ros_context, parameter_overrides=[Parameter("motor.rated", value=1.0)])
+        SimNode(context=ros_context, parameter_overrides=[Parameter('mode', value='fast')])
+    with pytest.raises(ParameterError, match='unknown parameter'):
+        SimNode(context=ros_context, parameter_overrides=[Parameter('motor.rated', value=1.0)])
 
 
 def _lockstep_run(steps):
     context = rclpy.Context()
     rclpy.init(context=context)
     sim, driver, executor = start(context, lockstep_timeout=1.0,
-                                  **{"disturbance.odom_position_noise": 0.001})
+                                  **{'disturbance.odom_position_noise': 0.001})
     try:
         driver.wait_odom(1)
         for k in range(steps):
@@ -321,7 +320,7 @@ def test_lockstep_reruns_are_bit_identical():
 
 
 def test_realtime_mode_never_runs_ahead_of_the_wall_clock(ros_context):
-    sim, driver, executor = start(ros_context, mode="realtime")
+    sim, driver, executor = start(ros_context, mode='realtime')
     try:
         begin = time.monotonic()
         driver.wait_odom(1)

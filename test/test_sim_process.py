@@ -1,30 +1,30 @@
 """The sim executable as a real process: parameter file in, odometry out, clean exit."""
 
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
+from nav_msgs.msg import Odometry
 import pytest
 import rclpy
-from nav_msgs.msg import Odometry
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-SIM = str(Path(sys.executable).parent / "sim")
+SIM = str(Path(sys.executable).parent / 'sim')
 
 
 def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
-    config = request.config.rootpath / "config" / "paper_case1.yaml"
-    proc = subprocess.Popen([SIM, "--ros-args", "--params-file", str(config), "-p", "mode:=realtime"],
+    config = request.config.rootpath / 'config' / 'paper_case1.yaml'
+    proc = subprocess.Popen([SIM, '--ros-args', '--params-file', str(config), '-p', 'mode:=realtime'],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     context = rclpy.Context()
     rclpy.init(context=context)
-    node = Node("listener", context=context)
+    node = Node('listener', context=context)
     got = []
-    node.create_subscription(Odometry, "odom", got.append,
+    node.create_subscription(Odometry, 'odom', got.append,
                              QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -32,7 +32,7 @@ def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
         deadline = time.monotonic() + 30.0
         while not got and time.monotonic() < deadline and proc.poll() is None:
             executor.spin_once(timeout_sec=0.1)
-        assert got, "no odometry from the sim process"
+        assert got, 'no odometry from the sim process'
         pose = got[-1].pose.pose.position
         assert (pose.x, pose.y) == pytest.approx((1.0, 4.0), abs=0.01)
     finally:
@@ -43,25 +43,25 @@ def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
     assert proc.returncode == 0, out
 
 
-@pytest.mark.parametrize("arg, needle", [
-    ("mode:=fast", "mode = 'fast'"),
-    ("physics_dt:=fast", "physics_dt = 'fast': must be of type double"),
-    ("physics_dt:=1", "physics_dt = 1.0 s: must be <= 0.01"),  # rclpy makes the int a double
-    ("motors.rated:=1.0", "motors.rated = 1.0: unknown parameter"),
+@pytest.mark.parametrize('arg, needle', [
+    ('mode:=fast', "mode = 'fast'"),
+    ('physics_dt:=fast', "physics_dt = 'fast': must be of type double"),
+    ('physics_dt:=1', 'physics_dt = 1.0 s: must be <= 0.01'),  # rclpy makes the int a double
+    ('motors.rated:=1.0', 'motors.rated = 1.0: unknown parameter'),
 ])
 def test_invalid_parameter_stops_the_process_with_its_name(arg, needle):
-    proc = subprocess.run([SIM, "--ros-args", "-p", arg], capture_output=True, text=True,
+    proc = subprocess.run([SIM, '--ros-args', '-p', arg], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 2
     assert needle in proc.stderr
-    assert "Traceback" not in proc.stderr
+    assert 'Traceback' not in proc.stderr
 
 
 # The sim's own main, in a child process whose world fails at its 100th physics step.
 FAILING_STEP = """
 import sys
 from nfmr_sim import world
-from nfmr_sim.sim_node import main
+from nfmr_sim.ros.sim_node import main
 
 step = world.ChassisWorld.step
 
@@ -79,8 +79,8 @@ sys.exit(main())
 # the 100th call.
 FAILING_TICK = """
 import sys
-from nfmr_dlsmc import tracking_session
-from nfmr_dlsmc.controller_node import main
+from nfmr_dlsmc.runtime import tracking_session
+from nfmr_dlsmc.ros.controller_node import main
 
 tick = tracking_session.TrackingSession.tick
 calls = []
@@ -96,16 +96,16 @@ sys.exit(main())
 """
 
 
-@pytest.mark.parametrize("script, args, message", [
-    (FAILING_STEP, ["mode:=realtime"],
-     "sim: step thread failed: RuntimeError: injected failure at step 100 (at <string>:"),
-    (FAILING_TICK, ["tick_source:=clock"],
-     "controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick 100 "
-     "(at <string>:"),
-], ids=["sim step thread", "controller clock loop"])
+@pytest.mark.parametrize('script, args, message', [
+    (FAILING_STEP, ['mode:=realtime'],
+     'sim: step thread failed: RuntimeError: injected failure at step 100 (at <string>:'),
+    (FAILING_TICK, ['tick_source:=clock'],
+     'controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick 100 '
+     '(at <string>:'),
+], ids=['sim step thread', 'controller clock loop'])
 def test_a_failing_loop_thread_ends_the_node_naming_the_error(script, args, message):
-    proc = subprocess.run([sys.executable, "-c", script, "--ros-args", "-p", *args],
+    proc = subprocess.run([sys.executable, '-c', script, '--ros-args', '-p', *args],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 1, proc.stderr
     assert message in proc.stderr
-    assert "Traceback" not in proc.stderr
+    assert 'Traceback' not in proc.stderr

@@ -2,15 +2,20 @@
 
 import math
 
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_sim.urdf import ChassisConfig
+from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
+from nfmr_sim.world_config import (
+    DisturbanceConfig,
+    ForcePulse,
+    FrictionConfig,
+    FrictionPatch,
+    MotorConfig,
+    WorldConfig,
+)
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.steering import RobotGeometry, SteerMode, wheel_commands
-from nfmr_sim.urdf import ChassisConfig
-from nfmr_sim.world import DRIVE_JOINTS, STEER_JOINTS, ChassisWorld
-from nfmr_sim.world_config import (DisturbanceConfig, ForcePulse, FrictionConfig,
-                                   FrictionPatch, MotorConfig, WorldConfig)
-from nfmr_dlsmc.validation import ParameterError
 
 GEOM = RobotGeometry()
 
@@ -27,9 +32,9 @@ def mean_of(outputs, getter, last_seconds=1.0, dt=0.001):
 
 
 def test_joint_names_say_which_wheel():
-    assert STEER_JOINTS == ("front_left_steer", "front_right_steer", "rear_left_steer",
-                            "rear_right_steer")
-    assert DRIVE_JOINTS[0] == "front_left_drive"
+    assert STEER_JOINTS == ('front_left_steer', 'front_right_steer', 'rear_left_steer',
+                            'rear_right_steer')
+    assert DRIVE_JOINTS[0] == 'front_left_drive'
 
 
 def test_straight_run_reaches_and_holds_one_metre_per_second():
@@ -195,13 +200,13 @@ def test_brake_stops_the_wheels_and_holds_steering():
         np.testing.assert_allclose(out[-1].joint_position[:4], held, atol=0.01)
 
 
-@pytest.mark.parametrize("factory, name", [
-    (lambda: ChassisConfig(total_mass=50.0), "chassis.total_mass"),
-    (lambda: MotorConfig(drive_gear_ratio=0.0), "motors.drive_gear_ratio"),
-    (lambda: FrictionConfig(lateral=-1.0), "friction.lateral"),
-    (lambda: FrictionPatch(1.0, 0.0, 0.0, 1.0), "friction.patch.x_max"),
-    (lambda: DisturbanceConfig(odom_latency_steps=-1), "disturbance.odom_latency_steps"),
-    (lambda: WorldConfig(physics_dt=0.1), "physics_dt"),
+@pytest.mark.parametrize('factory, name', [
+    (lambda: ChassisConfig(total_mass=50.0), 'chassis.total_mass'),
+    (lambda: MotorConfig(drive_gear_ratio=0.0), 'motors.drive_gear_ratio'),
+    (lambda: FrictionConfig(lateral=-1.0), 'friction.lateral'),
+    (lambda: FrictionPatch(1.0, 0.0, 0.0, 1.0), 'friction.patch.x_max'),
+    (lambda: DisturbanceConfig(odom_latency_steps=-1), 'disturbance.odom_latency_steps'),
+    (lambda: WorldConfig(physics_dt=0.1), 'physics_dt'),
 ])
 def test_invalid_world_parameters_are_named(factory, name):
     with pytest.raises(ParameterError) as info:
@@ -212,17 +217,17 @@ def test_invalid_world_parameters_are_named(factory, name):
 def test_sim_parameters_build_the_world_and_name_bad_values():
     from nfmr_sim.sim_params import sim_parameter_defaults, sim_settings
 
-    settings = sim_settings({"disturbance.pulses": [5.0, 0.5, 0.0, 0.0, 100.0],
-                             "friction.patches": [0.0, 1.0, -1.0, 1.0, 0.3],
-                             "steering.j1": 0.0, "steering.j2": 1.0})
+    settings = sim_settings({'disturbance.pulses': [5.0, 0.5, 0.0, 0.0, 100.0],
+                             'friction.patches': [0.0, 1.0, -1.0, 1.0, 0.3],
+                             'steering.j1': 0.0, 'steering.j2': 1.0})
     assert settings.world.disturbance.pulses == (ForcePulse(5.0, 0.5, 0.0, 0.0, 100.0),)
     assert settings.world.friction.patches == (FrictionPatch(0.0, 1.0, -1.0, 1.0, 0.3),)
     assert settings.world.tracked_point_offset == pytest.approx(-0.445)
     assert sim_settings({}) == sim_settings(sim_parameter_defaults())
-    for flat, name in (({"disturbance.pulses": [1.0, 2.0]}, "disturbance.pulses"),
-                       ({"mode": "fast"}, "mode"), ({"physics_dt": 0.5}, "physics_dt"),
-                       ({"initial_pose": [0.0, 1.0]}, "initial_pose"),
-                       ({"chassis.yaw": 1.0}, "chassis.yaw")):
+    for flat, name in (({'disturbance.pulses': [1.0, 2.0]}, 'disturbance.pulses'),
+                       ({'mode': 'fast'}, 'mode'), ({'physics_dt': 0.5}, 'physics_dt'),
+                       ({'initial_pose': [0.0, 1.0]}, 'initial_pose'),
+                       ({'chassis.yaw': 1.0}, 'chassis.yaw')):
         with pytest.raises(ParameterError) as info:
             sim_settings(flat)
         assert info.value.parameter == name

@@ -2,10 +2,9 @@
 
 import math
 
+from nfmr_dlsmc.core.sliding_functions import bounded_rate, sig_pow
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.sliding_functions import bounded_rate, sig_pow
 
 R2 = 17 / 33
 

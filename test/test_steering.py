@@ -2,22 +2,27 @@
 
 import math
 
+from nfmr_dlsmc.core.steering import (
+    centre_twist,
+    front_steer_from_yaw_rate,
+    RobotGeometry,
+    SteerMode,
+    unicycle_from_wheels,
+    wheel_commands,
+    wheel_commands_for_twist,
+    yaw_rate_from_front_steer,
+)
+from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
-
-from nfmr_dlsmc.steering import (RobotGeometry, SteerMode, centre_twist,
-                                 front_steer_from_yaw_rate, unicycle_from_wheels,
-                                 wheel_commands, wheel_commands_for_twist,
-                                 yaw_rate_from_front_steer)
-from nfmr_dlsmc.validation import ParameterError
 
 GEOM = RobotGeometry()
 DOUBLE, FRONT = SteerMode(1.0, 0.0), SteerMode(0.0, 1.0)
 CASES = [(1.0, 0.5), (0.2, 1.59), (2.0, -1.59), (0.5, 0.0), (1.3, -0.2), (0.2, -0.05)]
 
 
-@pytest.mark.parametrize("mode", [DOUBLE, FRONT, SteerMode(0.5, 0.5), SteerMode(-0.5, 1.5)])
-@pytest.mark.parametrize("v, omega", CASES)
+@pytest.mark.parametrize('mode', [DOUBLE, FRONT, SteerMode(0.5, 0.5), SteerMode(-0.5, 1.5)])
+@pytest.mark.parametrize('v, omega', CASES)
 def test_round_trip_unicycle_to_wheels_and_back(mode, v, omega):
     cmd = wheel_commands(v, omega, GEOM, mode)
     v_back, omega_back, lateral = unicycle_from_wheels(cmd.steer, cmd.wheel_speed, GEOM, mode)
@@ -27,8 +32,8 @@ def test_round_trip_unicycle_to_wheels_and_back(mode, v, omega):
     assert not cmd.limited
 
 
-@pytest.mark.parametrize("mode", [DOUBLE, FRONT])
-@pytest.mark.parametrize("v, omega", [c for c in CASES if c[1] != 0.0])
+@pytest.mark.parametrize('mode', [DOUBLE, FRONT])
+@pytest.mark.parametrize('v, omega', [c for c in CASES if c[1] != 0.0])
 def test_wheel_headings_are_perpendicular_to_their_icr_radius(mode, v, omega):
     cmd = wheel_commands(v, omega, GEOM, mode)
     icr = np.array([mode.zero_slip_offset(GEOM.wheelbase), v / omega])
@@ -56,7 +61,7 @@ def test_crab_mode_gives_equal_angles_and_no_yaw():
     cmd = wheel_commands(0.8, 0.0, GEOM, crab, crab_angle=0.4)
     np.testing.assert_allclose(cmd.steer, [0.4] * 4)
     np.testing.assert_allclose(cmd.wheel_speed, [0.8 / GEOM.wheel_radius] * 4)
-    with pytest.raises(ValueError, match="crab mode"):
+    with pytest.raises(ValueError, match='crab mode'):
         wheel_commands(0.8, 0.1, GEOM, crab)
 
 
@@ -81,7 +86,7 @@ def test_stationary_wheels_hold_their_angle():
     np.testing.assert_allclose(cmd.wheel_speed, 0.0)
 
 
-@pytest.mark.parametrize("mode", [DOUBLE, FRONT, SteerMode(0.3, 0.7)])
+@pytest.mark.parametrize('mode', [DOUBLE, FRONT, SteerMode(0.3, 0.7)])
 def test_eq2_agrees_with_rigid_body_geometry(mode):
     v, omega = 0.9, 0.7
     delta_f = front_steer_from_yaw_rate(v, omega, mode, GEOM.wheelbase)
@@ -91,19 +96,19 @@ def test_eq2_agrees_with_rigid_body_geometry(mode):
     assert delta_f == pytest.approx(math.atan2(vy + w * GEOM.wheelbase / 2, vx))
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"j1": 1.5, "j2": -0.5}, "j1"), ({"j1": 1.0, "j2": 1.0}, "j2"),
-    ({"j1": math.nan, "j2": 0.0}, "j1")])
+@pytest.mark.parametrize('kwargs, name', [
+    ({'j1': 1.5, 'j2': -0.5}, 'j1'), ({'j1': 1.0, 'j2': 1.0}, 'j2'),
+    ({'j1': math.nan, 'j2': 0.0}, 'j1')])
 def test_invalid_steer_modes(kwargs, name):
     with pytest.raises(ParameterError) as info:
         SteerMode(**kwargs)
     assert info.value.parameter == name
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"wheelbase": 0.0}, "geometry.wheelbase"), ({"track": -1.0}, "geometry.track"),
-    ({"wheel_radius": math.inf}, "geometry.wheel_radius"),
-    ({"steer_limit": 2.0}, "geometry.steer_limit")])
+@pytest.mark.parametrize('kwargs, name', [
+    ({'wheelbase': 0.0}, 'geometry.wheelbase'), ({'track': -1.0}, 'geometry.track'),
+    ({'wheel_radius': math.inf}, 'geometry.wheel_radius'),
+    ({'steer_limit': 2.0}, 'geometry.steer_limit')])
 def test_invalid_geometry(kwargs, name):
     with pytest.raises(ParameterError) as info:
         RobotGeometry(**kwargs)

@@ -2,19 +2,18 @@
 
 import math
 
+from nfmr_dlsmc.runtime.params import ControllerParams
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 import pytest
 
-from nfmr_dlsmc.params import ControllerParams
-from nfmr_dlsmc.tracking_session import STATE_FIELDS, TrackingSession
-
-T_INDEX = STATE_FIELDS.index("t")
+T_INDEX = STATE_FIELDS.index('t')
 
 
 def session():
     return TrackingSession(ControllerParams(), odom_timeout=0.1)
 
 
-def feed(s, x, y, stamp, frame="odom", wall=None):
+def feed(s, x, y, stamp, frame='odom', wall=None):
     wall = stamp if wall is None else wall
     accepted = s.on_odometry(x, y, 0.0, wall, stamp, stamp, frame)
     return accepted, s.tick(stamp, wall)
@@ -26,26 +25,26 @@ def test_nothing_is_commanded_before_the_first_valid_odometry():
     assert feed(s, math.nan, 0.0, 0.0)[1] is None  # invalid first odometry: still nothing
 
 
-@pytest.mark.parametrize("bad, reason", [
-    (dict(x=math.nan), "not finite"), (dict(x=math.inf), "not finite"),
-    (dict(frame="map"), "in frame 'map', expected 'odom'"),
-    (dict(x=13.0), "jumped 12.00 m in one message (limit 10 m)"),
+@pytest.mark.parametrize('bad, reason', [
+    (dict(x=math.nan), 'not finite'), (dict(x=math.inf), 'not finite'),
+    (dict(frame='map'), "in frame 'map', expected 'odom'"),
+    (dict(x=13.0), 'jumped 12.00 m in one message (limit 10 m)'),
 ])
 def test_invalid_odometry_stops_once_and_valid_odometry_resumes(bad, reason):
     s = session()
     for k in range(5):
         _, out = feed(s, 1.0, 4.0, k * 0.001)
         assert not out.stopped and out.v > 0.0
-    args = dict(x=1.0, y=4.0, stamp=0.005, frame="odom") | bad
-    accepted, out = feed(s, args["x"], args["y"], args["stamp"], args["frame"])
+    args = dict(x=1.0, y=4.0, stamp=0.005, frame='odom') | bad
+    accepted, out = feed(s, args['x'], args['y'], args['stamp'], args['frame'])
     assert accepted and out.stopped and out.v == 0.0 and out.omega == 0.0
     assert reason in out.report
     np_steer = out.steer.copy()
-    _, again = feed(s, args["x"], args["y"], 0.006, args["frame"])
+    _, again = feed(s, args['x'], args['y'], 0.006, args['frame'])
     assert again.stopped and again.report is None  # reported once
     assert (again.steer == np_steer).all()  # steering held
     _, back = feed(s, 1.0, 4.0, 0.007)
-    assert not back.stopped and "resumed" in back.report
+    assert not back.stopped and 'resumed' in back.report
 
 
 def test_a_jump_is_forgiven_only_when_odometry_comes_back():
@@ -60,9 +59,9 @@ def test_out_of_order_odometry_is_ignored():
     s = session()
     feed(s, 1.0, 4.0, 0.0)
     feed(s, 1.0, 4.0, 0.010)
-    assert s.on_odometry(2.0, 4.0, 0.0, 0.011, 0.009, 0.009, "odom") is False
+    assert s.on_odometry(2.0, 4.0, 0.0, 0.011, 0.009, 0.009, 'odom') is False
     out = s.tick(0.011, 0.011)
-    assert out.state[STATE_FIELDS.index("x")] == 1.0  # the late message was not used
+    assert out.state[STATE_FIELDS.index('x')] == 1.0  # the late message was not used
 
 
 def test_a_restarted_source_starts_tracking_over_once_its_stamps_confirm_it():
@@ -76,21 +75,21 @@ def test_a_restarted_source_starts_tracking_over_once_its_stamps_confirm_it():
         accepted, out = feed(s, 1.0, 4.0, k * 0.001, wall=3.0 + k * 0.001)
         assert accepted and out.stopped and s.restarts == 0
         reports.append(out.report)
-    assert "ignored until 3 messages in a row confirm a new time base" in reports[0]
+    assert 'ignored until 3 messages in a row confirm a new time base' in reports[0]
     accepted, out = feed(s, 1.0, 4.0, 0.002, wall=3.002)
     assert accepted and not out.stopped and s.restarts == 1
     assert out.state[T_INDEX] == pytest.approx(0.002)  # trajectory time from the new first stamp
-    assert "starts over" in out.report
+    assert 'starts over' in out.report
     assert s.controller.outer.s_x == 0.0  # e(0) of the new run: its first tracked tick
 
 
-@pytest.mark.parametrize("outlier", [1000.0, -1000.0, 2.5])
+@pytest.mark.parametrize('outlier', [1000.0, -1000.0, 2.5])
 def test_a_single_stamp_far_off_changes_nothing(outlier):
     s = session()
     for k in range(100):
         feed(s, 1.0, 4.0, k * 0.001)
     accepted, out = feed(s, 1.0, 4.0, 0.1 + outlier)
-    assert accepted and out.stopped and "from the last accepted one" in out.report
+    assert accepted and out.stopped and 'from the last accepted one' in out.report
     _, out = feed(s, 1.0, 4.0, 0.1)  # the genuine stream goes on
     assert not out.stopped and s.restarts == 0
     assert out.state[T_INDEX] == pytest.approx(0.1)
@@ -117,7 +116,7 @@ def test_stale_odometry_stops_and_fresh_odometry_resumes():
     s = session()
     feed(s, 1.0, 4.0, 0.0)
     out = s.tick(0.2, 0.2)  # 0.2 s of wall time without odometry, timeout 0.1 s
-    assert out.stopped and "old" in out.report
+    assert out.stopped and 'old' in out.report
     assert out.state[T_INDEX] == 0.0  # trajectory time of the last tracking tick
     _, out = feed(s, 1.0, 4.0, 0.3)
     assert not out.stopped and out.state[T_INDEX] == pytest.approx(0.3)

@@ -2,14 +2,13 @@
 
 import math
 
+from nfmr_dlsmc.core.trajectories import make_trajectory, reference_heading, TRAJECTORY_TYPES
+from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
 
-from nfmr_dlsmc.trajectories import TRAJECTORY_TYPES, make_trajectory, reference_heading
-from nfmr_dlsmc.validation import ParameterError
 
-
-@pytest.mark.parametrize("name", list(TRAJECTORY_TYPES))
+@pytest.mark.parametrize('name', list(TRAJECTORY_TYPES))
 def test_each_derivative_is_the_central_difference_of_the_one_before(name):
     # (x_d, y_d) -> (x_d', y_d') from sample(), (x_d', y_d') -> (x_d'', y_d'') from
     # acceleration(), both against a central difference.
@@ -24,7 +23,7 @@ def test_each_derivative_is_the_central_difference_of_the_one_before(name):
     assert np.shape(acceleration[0]) == np.shape(acceleration[1]) == t.shape
 
 
-@pytest.mark.parametrize("name", list(TRAJECTORY_TYPES))
+@pytest.mark.parametrize('name', list(TRAJECTORY_TYPES))
 def test_scalar_and_array_sampling_agree(name):
     traj = make_trajectory(name)
     arrays = traj.sample(np.array([3.7]))
@@ -34,7 +33,7 @@ def test_scalar_and_array_sampling_agree(name):
 
 
 def test_paper_sine_values():
-    x, y, xdot, ydot = make_trajectory("sine").sample(np.array([0.0, 2.0]))
+    x, y, xdot, ydot = make_trajectory('sine').sample(np.array([0.0, 2.0]))
     np.testing.assert_allclose(x, [0.0, 1.0])
     np.testing.assert_allclose(y, [0.0, math.sin(0.5)])
     np.testing.assert_allclose(xdot, [0.5, 0.5])
@@ -42,7 +41,7 @@ def test_paper_sine_values():
 
 
 def test_circle_has_constant_radius_and_speed():
-    traj = make_trajectory("circle")
+    traj = make_trajectory('circle')
     t = np.linspace(0, 60, 601)
     x, y, xdot, ydot = traj.sample(t)
     np.testing.assert_allclose(np.hypot(x, y - 3.0), 3.0)
@@ -50,9 +49,9 @@ def test_circle_has_constant_radius_and_speed():
 
 
 def test_line_heading_and_lemniscate_period():
-    x, y, xdot, ydot = make_trajectory("line").sample(np.array([2.0]))
+    x, y, xdot, ydot = make_trajectory('line').sample(np.array([2.0]))
     assert reference_heading(xdot, ydot)[0] == pytest.approx(math.pi / 6)
-    lem = make_trajectory("lemniscate")
+    lem = make_trajectory('lemniscate')
     period = 2 * math.pi / 0.1
     np.testing.assert_allclose(lem.sample(np.array([1.0 + period]))[:2],
                                lem.sample(np.array([1.0]))[:2], atol=1e-9)
@@ -60,9 +59,9 @@ def test_line_heading_and_lemniscate_period():
 
 def test_unknown_name_and_parameter_rejected():
     with pytest.raises(ParameterError, match="trajectory.name = 'spiral'"):
-        make_trajectory("spiral")
+        make_trajectory('spiral')
     with pytest.raises(ParameterError, match=r"trajectory\.radius .*not a parameter of 'sine'"):
-        make_trajectory("sine", radius=2.0)
-    with pytest.raises(ParameterError, match=r"trajectory\.speed = -1 m/s: must be > 0"):
-        make_trajectory("circle", speed=-1)
+        make_trajectory('sine', radius=2.0)
+    with pytest.raises(ParameterError, match=r'trajectory\.speed = -1 m/s: must be > 0'):
+        make_trajectory('circle', speed=-1)
 

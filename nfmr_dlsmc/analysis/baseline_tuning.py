@@ -1,0 +1,219 @@
+"""
+``nfmr-tune-baselines``: the documented, reproducible tuning of the comparison controllers.
+
+Every controller gets the same budget: ``--budget`` gain sets, the first its default
+gains (:mod:`nfmr_dlsmc.baselines.gains`), the others drawn log-uniformly from the ranges
+of :data:`SEARCH_SPACES` with one seeded generator per controller (a random search,
+Bergstra & Bengio 2012). The score is the paper's criterion for what the method is
+compared on:
+
+* the position controllers (Table 2): IAE of the distance error, summed over the two
+  Case 1 starts (1, 4, 0) and (4, 1, 0);
+* the inner-loop alternatives (Tables 3-4): IAE of theta_e = theta - theta_d in Case 2.
+
+The lowest score wins; ties (e.g. every candidate diverging) keep the earlier candidate.
+The DLSMC is not tuned: it runs the paper's published gains. The result is written as
+``config/comparison.yaml`` with the search recorded beside the gains.
+"""
+
+import argparse
+import math
+import os
+from pathlib import Path
+import sys
+import time
+
+from nfmr_dlsmc.analysis.comparison_scenarios import (
+    CASE1_LATERAL,
+    CASE1_LONGITUDINAL,
+    CASE2,
+    run_scenario,
+)
+from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES, load_gain_blocks
+from nfmr_dlsmc.cli.common import check_not_shipped, check_writable, OneLineParser, run_command
+from nfmr_dlsmc.core.metrics import error_criteria
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.worker_pool import worker_pool
+import numpy as np
+import yaml
+
+#: Log-uniform search ranges: controller -> {(section or None, gain): (low, high)}.
+SEARCH_SPACES = {
+    'pid': {(None, 'v_c'): (0.4, 0.7), (None, 'kp'): (0.05, 10.0), (None, 'ki'): (0.001, 1.0),
+            (None, 'kd'): (0.01, 5.0), (None, 'k_theta'): (0.1, 10.0)},
+    # k0 below the sine's slowest reference speed 0.5 m/s (see CsmcGains.k0).
+    'csmc': {(None, 'k0'): (0.01, 0.45), (None, 'k1'): (0.1, 10.0), (None, 'k2'): (0.1, 10.0),
+             (None, 'Q1'): (0.1, 10.0), (None, 'Q2'): (0.1, 10.0), (None, 'P1'): (0.001, 1.0),
+             (None, 'P2'): (0.001, 1.0)},
+    'dsmc': {(None, 'Q1'): (0.1, 10.0), (None, 'Q2'): (0.1, 10.0), (None, 'Q3'): (0.1, 10.0),
+             (None, 'P1'): (0.001, 1.0), (None, 'P2'): (0.001, 1.0), (None, 'P3'): (0.001, 1.0)},
+    'dl_crsmc': {('outer', 'rate'): (0.2, 2.0), ('outer', 'layer'): (0.005, 1.0),
+                 ('inner', 'rate'): (0.2, 5.0), ('inner', 'layer'): (0.001, 0.5)},
+    'dntsmc': {('outer', 'beta'): (0.1, 3.0), ('outer', 'k'): (0.1, 5.0),
+               ('inner', 'beta'): (0.1, 10.0), ('inner', 'k'): (0.1, 10.0),
+               ('inner', 'eta'): (0.001, 1.0)},
+    'btsmc_ntsmc': {('outer', 'C1'): (0.2, 2.0), ('outer', 'C2'): (0.2, 2.0),
+                    ('outer', 'k'): (0.1, 5.0), ('outer', 'xi'): (0.1, 2.0),
+                    ('inner', 'beta'): (0.1, 10.0), ('inner', 'k'): (0.1, 10.0),
+                    ('inner', 'eta'): (0.001, 1.0)},
+    'btintsmc_crsmc': {('inner', 'rate'): (0.2, 5.0), ('inner', 'layer'): (0.001, 0.5)},
+    'btintsmc_ntsmc': {('inner', 'beta'): (0.1, 10.0), ('inner', 'k'): (0.1, 10.0),
+                       ('inner', 'eta'): (0.001, 1.0)},
+    'pure_pursuit': {(None, 'lookahead'): (0.1, 5.0), (None, 'k_v'): (0.1, 10.0)},
+    'stanley': {(None, 'k'): (0.1, 10.0), (None, 'k_soft'): (0.01, 1.0),
+                (None, 'k_heading'): (0.5, 20.0), (None, 'k_v'): (0.1, 10.0)},
+    'kanayama': {(None, 'k_x'): (0.1, 10.0), (None, 'k_y'): (0.1, 50.0),
+                 (None, 'k_theta'): (0.1, 20.0)},
+}
+#: Controllers scored on Case 2 theta_e (the inner-loop comparison).
+INNER_LOOP_METHODS = ('btintsmc_crsmc', 'btintsmc_ntsmc')
+TUNED = tuple(name for name in CONTROLLER_NAMES if name in SEARCH_SPACES)
+
+
+def objective_name(name: str) -> str:
+    """What controller ``name`` is scored on."""
+    if name in INNER_LOOP_METHODS:
+        return 'IAE of theta - theta_d, Case 2 [rad*s]'
+    return 'IAE of the distance error, Case 1 (1,4,0) + (4,1,0) [m*s]'
+
+
+def score(name: str, block: dict) -> float:
+    """The tuning score of one gain block (lower is better; inf if not finite)."""
+    if name in INNER_LOOP_METHODS:
+        result = run_scenario(name, block, CASE2)
+        total = error_criteria(result.telemetry['theta_e'], result.dt).iae
+    else:
+        total = 0.0
+        for scenario in (CASE1_LONGITUDINAL, CASE1_LATERAL):
+            result = run_scenario(name, block, scenario)
+            total += error_criteria(result.distance_error, result.dt).iae
+    return total if math.isfinite(total) else math.inf
+
+
+def candidates(name: str, budget: int, seed: int) -> list[dict]:
+    """``budget`` gain blocks: the defaults (empty block) first, then random draws."""
+    rng = np.random.default_rng([seed, CONTROLLER_NAMES.index(name)])
+    blocks = [{}]
+    space = SEARCH_SPACES[name]
+    for _ in range(budget - 1):
+        block = {}
+        for (section, gain), (low, high) in space.items():
+            value = round(float(math.exp(rng.uniform(math.log(low), math.log(high)))), 6)
+            (block.setdefault(section, {}) if section else block)[gain] = value
+        blocks.append(block)
+    return blocks
+
+
+def _score_task(task):
+    name, index, block = task
+    return name, index, score(name, block)
+
+
+def tune(names, budget: int, seed: int, jobs: int, progress=None) -> dict:
+    """
+    Score every candidate of every controller; return name -> (best block, best score,
+    default score).
+    """
+    tasks = [(name, i, block) for name in names
+             for i, block in enumerate(candidates(name, budget, seed))]
+    blocks = {(name, i): block for name, i, block in tasks}
+    scores = {}
+    with worker_pool(jobs) as pool:
+        for done, (name, i, value) in enumerate(pool.map(_score_task, tasks, chunksize=2), 1):
+            scores[(name, i)] = value
+            if progress:
+                progress(done, len(tasks))
+    best = {}
+    for name in names:
+        values = [scores[(name, i)] for i in range(budget)]
+        index = int(np.argmin(values))
+        best[name] = (blocks[(name, index)], values[index], values[0])
+    return best
+
+
+def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: str) -> None:
+    """
+    ``config/comparison.yaml``: the DLSMC's paper gains, each tuned block and its record.
+
+    Blocks of controllers that are not tuned (``dlsmc_robot``, the robot profile) are kept
+    as the file at ``path`` had them.
+    """
+    previous = load_gain_blocks(path) if path.is_file() else {}
+    controllers = {'dlsmc': {}}
+    record = {}
+    for name in CONTROLLER_NAMES:
+        if name not in best:
+            if name != 'dlsmc' and name not in TUNED and name in previous:
+                controllers[name] = previous[name]
+            continue
+        block, value, default_value = best[name]
+        controllers[name] = block
+        record[name] = {'objective': objective_name(name), 'best': round(value, 4),
+                        'defaults': round(default_value, 4) if math.isfinite(default_value)
+                        else 'diverged'}
+    kept = [name for name in controllers if name != 'dlsmc' and name not in record]
+    header = (
+        '# Gains of every comparison controller (nfmr-compare), one block per controller.\n'
+        "# dlsmc: the paper's gains (section 4.1, the defaults), not tuned.\n"
+        f'# The others: random search, {budget} gain sets each (defaults first), seed {seed},\n'
+        "# ranges in nfmr_dlsmc/analysis/baseline_tuning.py; objective per controller under 'tuning'.\n"
+        f'# Reproduce: {command}\n'
+        + (f"# Not tuned, kept from the previous file: {', '.join(kept)} (dlsmc_robot: the robot\n"
+           '# profile, the same values as config/robot_case1.yaml, which explains them).\n'
+           if kept else ''))
+    document = {'controllers': controllers,
+                'tuning': {'budget': budget, 'seed': seed, 'method': 'random search',
+                           'results': record}}
+    path.write_text(header + yaml.safe_dump(document, sort_keys=False))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(prog='nfmr-tune-baselines',
+                                     description=__doc__.split('\n')[0].split(': ', 1)[1])
+    parser.add_argument('--budget', type=int, default=60, help='gain sets per controller')
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--controllers', nargs='+', choices=TUNED, default=list(TUNED))
+    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1)
+    parser.add_argument('--out', type=Path, default=Path('comparison.yaml'),
+                        help='gains file to write (default comparison.yaml here; the shipped '
+                             'config/comparison.yaml only with --force)')
+    parser.add_argument('--force', action='store_true',
+                        help='allow --out to replace a gains file shipped with nfmr')
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of ``nfmr-tune-baselines``."""
+    return run_command('nfmr-tune-baselines', _run, argv)
+
+
+def _run(argv) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.budget < 1 or args.jobs < 1:
+        parser.error('--budget and --jobs must be >= 1')
+    check_not_shipped(parser, args.out, '--out', args.force)
+    check_writable(parser, args.out, '--out')
+    begin = time.perf_counter()
+
+    def progress(done, total):
+        print(f'\r{done}/{total} runs scored, {time.perf_counter() - begin:.0f} s',
+              end='', file=sys.stderr, flush=True)
+
+    try:
+        best = tune(args.controllers, args.budget, args.seed, args.jobs, progress)
+    except ParameterError as exc:
+        parser.error(str(exc))
+    print(file=sys.stderr)
+    for name, (block, value, default_value) in best.items():
+        print(f'{name:15s} {objective_name(name)}: {value:.4f} (defaults {default_value:.4f})')
+    command = (f'nfmr-tune-baselines --budget {args.budget} --seed {args.seed}'
+               + ('' if list(args.controllers) == list(TUNED)
+                  else ' --controllers ' + ' '.join(args.controllers)))
+    write_gains_file(args.out, best, args.budget, args.seed, command)
+    print(f'wrote {args.out} in {time.perf_counter() - begin:.0f} s')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

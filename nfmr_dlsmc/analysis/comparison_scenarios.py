@@ -1,0 +1,83 @@
+"""
+The paper's comparison scenarios (section 4.2): the sine reference, 100 s at 1 ms,
+Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses; on the
+kinematic model (3) or the pybullet chassis.
+"""
+
+from dataclasses import dataclass
+import math
+
+from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.plants.kinematic import SimResult, simulate, with_steer_angles
+from nfmr_dlsmc.plants.registry import robot_plant
+
+#: The plants a scenario runs on: the unicycle model (3), forward Euler; the simulated
+#: 4WIS chassis (Table 1, double Ackermann) in this process.
+PLANTS = ('kinematic', 'pybullet')
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """
+    One run of the comparison: a case, a start and a disturbance.
+
+    Attributes
+    ----------
+    case : str
+        ``"case1"`` or ``"case2"``.
+    x0 : tuple of 3 floats
+        Initial pose (x [m], y [m], theta [rad]).
+    disturbance : YawRateDisturbance
+    duration : float
+        [s]
+    dt : float
+        Control and integration period [s].
+
+    """
+
+    case: str
+    x0: tuple
+    disturbance: YawRateDisturbance
+    duration: float = 100.0
+    dt: float = 0.001
+
+    @property
+    def start_key(self) -> str:
+        """The start as the key of ``results.json``, e.g. ``"1,4,0"``."""
+        return ','.join(f'{value:.6g}' for value in self.x0)
+
+
+#: Case 1 (a) large lateral error, (b) large longitudinal error (Fig. 7), no disturbance.
+CASE1_LATERAL = Scenario('case1', (4.0, 1.0, 0.0), YawRateDisturbance())
+CASE1_LONGITUDINAL = Scenario('case1', (1.0, 4.0, 0.0), YawRateDisturbance())
+#: Case 2: x0 = (1, 1, pi/6), 0.5 rad/s yaw-rate pulses at 5 s and 50 s.
+CASE2 = Scenario('case2', (1.0, 1.0, math.pi / 6.0), paper_disturbance())
+SCENARIOS = (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)
+
+
+def run_scenario(name: str, block: dict | None, scenario: Scenario,
+                 plant: str = 'kinematic') -> SimResult:
+    """
+    Controller ``name`` with gain block ``block`` on ``scenario`` (paper sine, paper
+    limits) on ``plant`` (one of :data:`PLANTS`).
+
+    On the kinematic model the result's ``steer`` holds the steer angles [rad] the double
+    Ackermann mapping would command for (v, omega + disturbance); on pybullet the
+    disturbance is added to omega before the wheel mapping and the chassis is that of the
+    default world of the registered ``pybullet`` plant (Table 1, physics at 1 ms).
+    """
+    if plant not in PLANTS:
+        raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
+    controller = build_controller(name, block, dt=scenario.dt)
+    trajectory = make_trajectory('sine')
+    if plant == 'pybullet':
+        plant_ = robot_plant('pybullet')
+        return plant_.simulate(controller, trajectory, scenario.x0, scenario.duration,
+                               plant_.settings({}).world, RobotGeometry(), SteerMode(),
+                               scenario.disturbance, None)
+    result = simulate(controller, trajectory, scenario.x0, scenario.duration, scenario.dt,
+                      scenario.disturbance)
+    return with_steer_angles(result, RobotGeometry(), SteerMode())

@@ -1,0 +1,151 @@
+"""The double-loop cascade of Fig. 2 with any position loop and any attitude loop."""
+
+import math
+
+from nfmr_dlsmc.core.gains import InputLimits
+
+_TWO_PI = 2.0 * math.pi
+
+
+class CascadeController:
+    """
+    Position loop -> (v, theta_d) -> attitude loop -> omega, for one robot.
+
+    Each step:
+
+    1. errors in the global frame, x_e = x - x_d, y_e = y - y_d (eq. 8);
+    2. position loop ``outer.step(x_e, y_e, xdot_d, ydot_d, dt) -> (u_x, u_y)``;
+       v = sqrt(u_x^2 + u_y^2) and theta_d = atan2(u_y, u_x) (eq. 40);
+    3. thetadot_d as the backward difference of the wrapped theta_d over the step
+       (doc/design.md, D5; 0 at the first step), optionally low-pass filtered with time
+       constant ``filter_tau`` (0: the raw difference); or, with ``analytic_rate``, the
+       derivative of eq. (40)
+
+           thetadot_d = (u_x u_y' - u_y u_x') / (u_x^2 + u_y^2),
+
+       where (u_x', u_y') = ``outer.input_rate(x_e', y_e', x_d'', y_d'')`` along the
+       kinematic model's error rate x_e' = v cos(theta) - x_d', y_e' = v sin(theta) - y_d'
+       with this step's saturated v;
+    4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
+       attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
+    5. saturation v in [v_min, v_max], |omega| <= omega_max.
+
+    The outer loop exposes ``s_x`` and ``s_y`` (its sliding variables) after a step.
+
+    Attributes (after a step)
+    -------------------------
+    x_e, y_e : float
+        Position errors [m].
+    theta_d, thetadot_d : float
+        Desired heading [rad] and its rate [rad/s].
+    s_theta : float
+        Attitude sliding variable = theta_e [rad].
+    v_raw, omega_raw : float
+        Inputs before saturation [m/s], [rad/s].
+    v_saturated, omega_saturated : bool
+        Saturation flags.
+    """
+
+    #: Names of the values :meth:`telemetry` returns, in order.
+    TELEMETRY_FIELDS = ('x_e', 'y_e', 'theta_d', 'thetadot_d', 'theta_e', 's_x', 's_y',
+                        'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated')
+
+    __slots__ = ('name', '_limits', '_dt', '_filter_tau', '_analytic', 'outer', 'inner',
+                 '_has_previous',
+                 'x_e', 'y_e', 'theta_d', 'thetadot_d', 's_theta', 'v_raw', 'omega_raw',
+                 'v_saturated', 'omega_saturated')
+
+    def __init__(self, outer, inner, limits: InputLimits | None = None, dt: float = 0.001,
+                 filter_tau: float = 0.0, name: str = 'cascade', analytic_rate: bool = False):
+        self.name = name
+        self._analytic = analytic_rate
+        self.outer = outer
+        self.inner = inner
+        self._limits = InputLimits() if limits is None else limits
+        self._dt = dt  # [s] default step length
+        self._filter_tau = filter_tau  # [s]
+        self.reset()
+
+    @property
+    def period(self) -> float:
+        """The default step length [s] (the control period)."""
+        return self._dt
+
+    def reset(self) -> None:
+        """Start over: the next step is t = 0 of a new run."""
+        self.outer.reset()
+        self.inner.reset()
+        self._has_previous = False
+        self.x_e = self.y_e = 0.0
+        self.theta_d = self.thetadot_d = self.s_theta = 0.0
+        self.v_raw = self.omega_raw = 0.0
+        self.v_saturated = self.omega_saturated = False
+
+    def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
+             ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
+             yddot_d: float = 0.0) -> tuple[float, float]:
+        """
+        One control period.
+
+        Parameters
+        ----------
+        x, y, theta : float
+            Measured pose of point P [m, m, rad].
+        x_d, y_d, xdot_d, ydot_d : float
+            Reference position [m] and velocity [m/s] at this instant.
+        dt : float, optional
+            Time since the previous step [s]; default the configured period. A loop with
+            jitter passes the measured interval so integrals and thetadot_d stay right.
+        xddot_d, yddot_d : float
+            Reference acceleration [m/s^2], used by the analytic thetadot_d only.
+
+        Returns
+        -------
+        v, omega : float
+            Saturated inputs [m/s], [rad/s].
+
+        """
+        x_e = x - x_d
+        y_e = y - y_d
+        if dt is None:
+            dt = self._dt
+        u_x, u_y = self.outer.step(x_e, y_e, xdot_d, ydot_d, dt)
+        theta_d = math.atan2(u_y, u_x)
+        v_raw = math.hypot(u_x, u_y)
+        limits = self._limits
+        v = limits.v_min if v_raw < limits.v_min else (
+            limits.v_max if v_raw > limits.v_max else v_raw)
+        # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
+        if self._analytic:
+            udot_x, udot_y = self.outer.input_rate(v * math.cos(theta) - xdot_d,
+                                                   v * math.sin(theta) - ydot_d,
+                                                   xddot_d, yddot_d)
+            thetadot_d = (u_x * udot_y - u_y * udot_x) / (v_raw * v_raw) if v_raw > 0.0 else 0.0
+        elif self._has_previous:
+            raw = math.remainder(theta_d - self.theta_d, _TWO_PI)
+            if raw == -math.pi:
+                raw = math.pi
+            raw /= dt
+            # First-order low-pass; with no filter (tau = 0) the gain is 1.
+            thetadot_d = self.thetadot_d + dt / (self._filter_tau + dt) * (raw - self.thetadot_d)
+        else:
+            thetadot_d = 0.0
+        self._has_previous = True
+        s_theta = math.remainder(theta - theta_d, _TWO_PI)
+        if s_theta == -math.pi:
+            s_theta = math.pi
+        omega_raw = self.inner.step(s_theta, thetadot_d, dt)
+        omega = limits.omega_max if omega_raw > limits.omega_max else (
+            -limits.omega_max if omega_raw < -limits.omega_max else omega_raw)
+        self.v_saturated = v != v_raw
+        self.omega_saturated = omega != omega_raw
+        self.x_e, self.y_e = x_e, y_e
+        self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
+        self.v_raw, self.omega_raw = v_raw, omega_raw
+        return v, omega
+
+    def telemetry(self) -> tuple:
+        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
+                self.outer.s_x, self.outer.s_y, self.v_raw, self.omega_raw,
+                self.v_saturated, self.omega_saturated)

@@ -1,0 +1,58 @@
+"""The double-loop sliding-mode controller: BTINTSMC position loop -> ABFSMC attitude loop."""
+
+from nfmr_dlsmc.core.cascade import CascadeController
+from nfmr_dlsmc.core.gains import DlsmcConfig
+from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop
+from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
+
+
+class DlsmcController(CascadeController):
+    """
+    The DLSMC: the :class:`~nfmr_dlsmc.core.cascade.CascadeController` of Fig. 2 with the
+    BTINTSMC position loop (eqs 32-35) and the ABFSMC attitude loop (eqs 10-13), stepped
+    once per control period ``config.dt``.
+
+    Attributes (after a step): those of the cascade, and
+    ``outer``, ``inner`` : BtintsmcOuterLoop, AbfsmcInnerLoop with their own step
+    attributes (s_x, s_y, eta_hat, phase, ...).
+    """
+
+    #: Names of the values :meth:`telemetry` returns, in order.
+    TELEMETRY_FIELDS = ('x_e', 'y_e', 'theta_d', 'thetadot_d', 'theta_e', 's_x', 's_y',
+                        'eta_hat', 'inner_phase', 'v_raw', 'omega_raw', 'v_saturated',
+                        'omega_saturated')
+
+    __slots__ = ('_config',)
+
+    def __init__(self, config: DlsmcConfig | None = None):
+        config = DlsmcConfig() if config is None else config
+        super().__init__(BtintsmcOuterLoop(config.outer),
+                         AbfsmcInnerLoop(config.inner, config.limits.omega_max),
+                         config.limits, config.dt, config.thetadot_filter, 'dlsmc',
+                         config.thetadot_source == 'analytic')
+        self.config = config
+
+    @property
+    def config(self) -> DlsmcConfig:
+        """
+        The configuration in use; assigning a new one takes effect at the next step
+        and keeps the loops' state (integrals, e(0), adaptive phase).
+        """
+        return self._config
+
+    @config.setter
+    def config(self, config: DlsmcConfig) -> None:
+        self._config = config
+        self._limits = config.limits
+        self._dt = config.dt
+        self._filter_tau = config.thetadot_filter
+        self._analytic = config.thetadot_source == 'analytic'
+        self.outer.gains = config.outer
+        self.inner.gains = config.inner
+        self.inner.omega_max = config.limits.omega_max
+
+    def telemetry(self) -> tuple:
+        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
+                self.outer.s_x, self.outer.s_y, self.inner.eta_hat, self.inner.phase,
+                self.v_raw, self.omega_raw, self.v_saturated, self.omega_saturated)

@@ -1,0 +1,270 @@
+"""
+Four-wheel independent steering geometry: (v, omega) at P <-> steer angles and wheel speeds.
+
+Body frame (REP 103): x forward, y left, origin at the geometric centre of the chassis.
+Wheels are ordered front-left, front-right, rear-left, rear-right (doc/design.md, conventions).
+
+Steer modes follow doc/design.md, D1-D3. With j1 = -tan(delta_r)/tan(delta_f):
+j1 = 1 double Ackermann (rear counter-steers), j1 = 0 front-only Ackermann, j1 = -1 crab
+(all wheels parallel, no yaw). The paper's eq. (2) uses the effective wheelbase
+(j1 + j2) L; we require j1 + j2 = 1 so that it equals the real wheelbase L and eq. (2)
+agrees with the rigid-body geometry below.
+"""
+
+from dataclasses import dataclass
+import math
+
+from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
+import numpy as np
+
+#: Wheel order of every per-wheel array.
+WHEEL_NAMES = ('front_left', 'front_right', 'rear_left', 'rear_right')
+
+
+@dataclass(frozen=True)
+class RobotGeometry:
+    """
+    Chassis geometry; defaults from the paper's Table 1.
+
+    Attributes
+    ----------
+    wheelbase : float
+        L, distance between the front and rear axles [m] (Table 1 length 0.89 m).
+    track : float
+        Distance between the left and right wheels [m] (Table 1 width 0.53 m).
+    wheel_radius : float
+        [m] (Table 1 wheel diameter 0.28 m).
+    steer_limit : float
+        Largest |steer angle| a steer joint can reach [rad], in (0, pi/2].
+
+    """
+
+    wheelbase: float = 0.89
+    track: float = 0.53
+    wheel_radius: float = 0.14
+    steer_limit: float = math.pi / 2
+
+    def __post_init__(self):
+        check_positive('geometry.wheelbase', self.wheelbase, 'm')
+        check_positive('geometry.track', self.track, 'm')
+        check_positive('geometry.wheel_radius', self.wheel_radius, 'm')
+        limit = check_positive('geometry.steer_limit', self.steer_limit, 'rad')
+        if limit > math.pi / 2:
+            raise ParameterError('geometry.steer_limit', self.steer_limit,
+                                 'must be <= pi/2 (a wheel reverses beyond that)', 'rad')
+
+    @property
+    def wheel_positions(self) -> np.ndarray:
+        """(4, 2) array of wheel contact points (x, y) in the body frame [m], FL FR RL RR."""
+        a, b = 0.5 * self.wheelbase, 0.5 * self.track
+        return np.array([[a, b], [a, -b], [-a, b], [-a, -b]])
+
+
+@dataclass(frozen=True)
+class SteerMode:
+    """
+    The double-Ackermann configuration (j1, j2) of eqs (1), (2).
+
+    Attributes
+    ----------
+    j1 : float
+        -tan(delta_r)/tan(delta_f), in [-1, 1] (doc/design.md, D1).
+    j2 : float
+        Must equal 1 - j1.
+
+    """
+
+    j1: float = 1.0
+    j2: float = 0.0
+
+    def __post_init__(self):
+        j1 = check_finite('j1', self.j1)
+        j2 = check_finite('j2', self.j2)
+        if not -1.0 <= j1 <= 1.0:
+            raise ParameterError('j1', self.j1, 'must be in [-1, 1] (1 double Ackermann, '
+                                 '0 front-only, -1 crab)')
+        if not math.isclose(j1 + j2, 1.0, abs_tol=1e-9):
+            raise ParameterError('j2', self.j2, f'must equal 1 - j1 = {1.0 - j1:g}')
+
+    @property
+    def is_crab(self) -> bool:
+        """True for in-phase steering (j1 = -1): translation without yaw."""
+        return self.j1 == -1.0
+
+    def zero_slip_offset(self, wheelbase: float) -> float:
+        """
+        x_c = (L/2)(j1 - 1)/(j1 + 1) [m]: body-frame x of the point P with no side-slip.
+
+        This is the point whose pose the controller tracks (doc/design.md, D2): the
+        geometric centre for j1 = 1, the rear axle for j1 = 0. Undefined for crab mode.
+        """
+        if self.is_crab:
+            raise ValueError('crab mode (j1 = -1) has no zero-side-slip point: it does not yaw')
+        return 0.5 * wheelbase * (self.j1 - 1.0) / (self.j1 + 1.0)
+
+
+@dataclass(frozen=True)
+class WheelCommands:
+    """
+    Per-wheel commands, FL FR RL RR.
+
+    Attributes
+    ----------
+    steer : ndarray (4,)
+        Steer angles [rad], within the steer limit.
+    wheel_speed : ndarray (4,)
+        Drive speeds [rad/s]; negative means the wheel rolls backwards along its heading.
+    limited : bool
+        True when the geometry asked for a steer angle beyond the limit (then clipped).
+
+    """
+
+    steer: np.ndarray
+    wheel_speed: np.ndarray
+    limited: bool
+
+
+def yaw_rate_from_front_steer(v: float, delta_f: float, mode: SteerMode,
+                              wheelbase: float) -> float:
+    """Omega = (j1 + 1) v tan(delta_f) / ((j1 + j2) L), eq. (2) [rad/s]."""
+    return (mode.j1 + 1.0) * v * math.tan(delta_f) / ((mode.j1 + mode.j2) * wheelbase)
+
+
+def front_steer_from_yaw_rate(v: float, omega: float, mode: SteerMode,
+                              wheelbase: float) -> float:
+    """
+    delta_f [rad] of the virtual centre-line front wheel, eq. (2) solved for delta_f.
+
+    Continuous through v = 0: the angle is atan2(omega (j1 + j2) L, (j1 + 1) v).
+    """
+    return math.atan2(omega * (mode.j1 + mode.j2) * wheelbase, (mode.j1 + 1.0) * v)
+
+
+def centre_twist(v: float, omega: float, mode: SteerMode, wheelbase: float,
+                 crab_angle: float = 0.0) -> tuple[float, float, float]:
+    """
+    Body twist (vx, vy, omega) of the geometric centre for unicycle inputs at P.
+
+    P moves along the body x axis at speed v [m/s] and the body yaws at omega [rad/s]; with
+    P at x_c, the centre moves at (v, -omega x_c). In crab mode the body translates at
+    speed v along ``crab_angle`` [rad] (from the body x axis) and omega must be 0.
+    """
+    if mode.is_crab:
+        if omega != 0.0:
+            raise ValueError(f'crab mode (j1 = -1) cannot yaw: omega = {omega!r} rad/s, '
+                             'must be 0')
+        return v * math.cos(crab_angle), v * math.sin(crab_angle), 0.0
+    return v, -omega * mode.zero_slip_offset(wheelbase), omega
+
+
+def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: RobotGeometry,
+                             hold_steer=None) -> WheelCommands:
+    """
+    Steer angles and wheel speeds that realise the body twist (vx, vy, omega) at the centre.
+
+    Wheel i at (x_i, y_i) moves at (vx - omega y_i, vy + omega x_i): perpendicular to its
+    radius from the instantaneous centre of rotation (doc/design.md, D3). Its steer angle is
+    the direction of that velocity folded into [-pi/2, pi/2] (a reversed wheel drives
+    backwards) and its speed is |velocity| / wheel_radius.
+
+    Parameters
+    ----------
+    vx, vy : float
+        Centre velocity in the body frame [m/s].
+    omega : float
+        Yaw rate [rad/s].
+    geometry : RobotGeometry
+    hold_steer : array-like (4,), optional
+        Steer angles [rad] kept by wheels that do not move (default 0).
+
+    """
+    pos = geometry.wheel_positions
+    wvx = vx - omega * pos[:, 1]
+    wvy = vy + omega * pos[:, 0]
+    speed = np.hypot(wvx, wvy) / geometry.wheel_radius
+    steer = np.arctan2(wvy, wvx)
+    reverse = np.abs(steer) > 0.5 * math.pi
+    steer = np.where(reverse, steer - np.copysign(math.pi, steer), steer)
+    speed = np.where(reverse, -speed, speed)
+    still = np.hypot(wvx, wvy) < 1e-12
+    if np.any(still):
+        held = np.zeros(4) if hold_steer is None else np.asarray(hold_steer, dtype=float)
+        steer = np.where(still, held, steer)
+    limited = bool(np.any(np.abs(steer) > geometry.steer_limit + 1e-12))
+    steer = np.clip(steer, -geometry.steer_limit, geometry.steer_limit)
+    return WheelCommands(steer=steer, wheel_speed=speed, limited=limited)
+
+
+def wheel_commands(v: float, omega: float, geometry: RobotGeometry, mode: SteerMode,
+                   crab_angle: float = 0.0, hold_steer=None) -> WheelCommands:
+    """Unicycle inputs (v [m/s], omega [rad/s]) at P -> per-wheel commands (doc/design.md, D1-D3)."""
+    vx, vy, w = centre_twist(v, omega, mode, geometry.wheelbase, crab_angle)
+    return wheel_commands_for_twist(vx, vy, w, geometry, hold_steer)
+
+
+def steer_angle_series(v, omega, geometry: RobotGeometry, mode: SteerMode) -> np.ndarray:
+    """
+    The steer angles [rad] (N, 4) that :func:`wheel_commands` gives for a series of
+    unicycle inputs v [m/s], omega [rad/s] at P (N each), wheels that stand still keeping
+    their previous angle (0 at the start); vectorised over the series.
+    """
+    v = np.asarray(v, dtype=float)
+    omega = np.asarray(omega, dtype=float)
+    if mode.is_crab:
+        raise ValueError('crab mode (j1 = -1) has no unicycle mapping with omega != 0')
+    pos = geometry.wheel_positions
+    vy = -omega * mode.zero_slip_offset(geometry.wheelbase)
+    wvx = v[:, None] - omega[:, None] * pos[None, :, 1]
+    wvy = vy[:, None] + omega[:, None] * pos[None, :, 0]
+    steer = np.arctan2(wvy, wvx)
+    steer = np.where(np.abs(steer) > 0.5 * math.pi, steer - np.copysign(math.pi, steer), steer)
+    moving = np.hypot(wvx, wvy) >= 1e-12
+    # Forward-fill the still wheels from their last moving sample.
+    index = np.where(moving, np.arange(len(v))[:, None], -1)
+    np.maximum.accumulate(index, axis=0, out=index)
+    filled = np.where(index >= 0, np.take_along_axis(steer, np.maximum(index, 0), axis=0), 0.0)
+    return np.clip(filled, -geometry.steer_limit, geometry.steer_limit)
+
+
+def twist_from_wheels(steer, wheel_speed, geometry: RobotGeometry) -> tuple[float, float, float, float]:
+    """
+    Least-squares body twist (vx, vy, omega) of the centre from measured wheel states.
+
+    Solves  r w_i cos(d_i) = vx - omega y_i,  r w_i sin(d_i) = vy + omega x_i  for all
+    four wheels.
+
+    Returns
+    -------
+    vx, vy : float
+        Centre velocity [m/s].
+    omega : float
+        Yaw rate [rad/s].
+    slip_rms : float
+        RMS of the residual wheel velocities [m/s]: 0 when the wheels agree on one ICR.
+
+    """
+    steer = np.asarray(steer, dtype=float)
+    speed = np.asarray(wheel_speed, dtype=float) * geometry.wheel_radius
+    pos = geometry.wheel_positions
+    a = np.zeros((8, 3))
+    a[:4, 0] = 1.0
+    a[:4, 2] = -pos[:, 1]
+    a[4:, 1] = 1.0
+    a[4:, 2] = pos[:, 0]
+    b = np.concatenate([speed * np.cos(steer), speed * np.sin(steer)])
+    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
+    residual = a @ sol - b
+    return float(sol[0]), float(sol[1]), float(sol[2]), float(np.sqrt(np.mean(residual ** 2)))
+
+
+def unicycle_from_wheels(steer, wheel_speed, geometry: RobotGeometry,
+                         mode: SteerMode) -> tuple[float, float, float]:
+    """
+    Measured wheel states -> (v [m/s], omega [rad/s], lateral velocity of P [m/s]).
+
+    The inverse of :func:`wheel_commands`: v is the forward speed of P and the lateral
+    velocity of P is ~0 whenever the wheels follow the mode's geometry.
+    """
+    vx, vy, omega, _ = twist_from_wheels(steer, wheel_speed, geometry)
+    lateral = vy + omega * mode.zero_slip_offset(geometry.wheelbase)
+    return vx, omega, lateral

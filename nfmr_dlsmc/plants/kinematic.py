@@ -1,0 +1,166 @@
+"""Closed-loop simulation of the unicycle kinematics (3) under a controller."""
+
+from dataclasses import dataclass, replace
+import math
+
+from nfmr_dlsmc.core.disturbances import YawRateDisturbance
+from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
+from nfmr_dlsmc.core.trajectories import reference_heading
+from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """
+    Time series of one closed-loop run; every array has one entry per control step.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time [s] of each step, t_k = k dt.
+    state : ndarray, shape (N, 3)
+        Pose (x, y, theta) of P at t_k [m, m, rad]; theta is not wrapped.
+    reference : ndarray, shape (N, 4)
+        (x_d, y_d, xdot_d, ydot_d) at t_k [m, m, m/s, m/s].
+    v, omega : ndarray
+        Applied (saturated) inputs over [t_k, t_k+1) [m/s], [rad/s].
+    disturbance : ndarray
+        Yaw-rate disturbance varpi over [t_k, t_k+1) [rad/s].
+    telemetry : dict[str, ndarray]
+        The controller's internal signals (``controller.TELEMETRY_FIELDS``).
+    dt : float
+        Control and integration period [s].
+    final_state : ndarray, shape (3,)
+        Pose at t_N = N dt, after the last step.
+    steer : ndarray, shape (N, 4), or None
+        Commanded steer angles [rad], FL FR RL RR (plants with wheels only).
+    steer_joint_velocity : ndarray, shape (N, 4), or None
+        Measured steer joint rates [rad/s] (the pybullet plant only).
+
+    """
+
+    t: np.ndarray
+    state: np.ndarray
+    reference: np.ndarray
+    v: np.ndarray
+    omega: np.ndarray
+    disturbance: np.ndarray
+    telemetry: dict
+    dt: float
+    final_state: np.ndarray
+    steer: np.ndarray | None = None
+    steer_joint_velocity: np.ndarray | None = None
+
+    @property
+    def distance_error(self) -> np.ndarray:
+        """sqrt(x_e^2 + y_e^2) [m] at each step (the error of Table 2)."""
+        return np.hypot(self.state[:, 0] - self.reference[:, 0],
+                        self.state[:, 1] - self.reference[:, 1])
+
+    @property
+    def theta_r(self) -> np.ndarray:
+        """Reference tangent direction theta_r [rad] at each step, eq. (7)."""
+        return reference_heading(self.reference[:, 2], self.reference[:, 3])
+
+
+def sample_reference(trajectory, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    The reference at times ``t`` [s]: (x_d, y_d, xdot_d, ydot_d) as an (N, 4) array
+    [m, m, m/s, m/s] and (xddot_d, yddot_d) as an (N, 2) array [m/s^2].
+    """
+    def columns(values):
+        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
+                                for c in values])
+    return columns(trajectory.sample(t)), columns(trajectory.acceleration(t))
+
+
+def with_steer_angles(result: 'SimResult', geometry: RobotGeometry,
+                      mode: SteerMode) -> 'SimResult':
+    """
+    ``result`` of the kinematic model with the steer angles the wheel mapping would
+    command for its inputs (omega with the yaw-rate disturbance, as the chassis gets it).
+    """
+    return replace(result, steer=steer_angle_series(result.v, result.omega + result.disturbance,
+                                                    geometry, mode))
+
+
+def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]:
+    """
+    Validate a run's start: (x0 as 3 finite floats, number of steps).
+
+    Raises
+    ------
+    ParameterError
+        Bad ``x0``, ``duration`` or ``dt``, or ``dt`` unequal to ``controller.period``.
+
+    """
+    dt = check_positive('dt', dt, 's')
+    duration = check_positive('duration', duration, 's')
+    x0 = tuple(x0)
+    if len(x0) != 3:
+        raise ParameterError('x0', x0, 'must have 3 entries (x [m], y [m], theta [rad])')
+    x0 = tuple(check_finite(f'x0[{i}]', value) for i, value in enumerate(x0))
+    period = getattr(controller, 'period', None)
+    if period is not None and not math.isclose(period, dt):
+        raise ParameterError('dt', dt, f'must equal the controller period {period:g} s', 's')
+    n = int(round(duration / dt))
+    if n < 1:
+        raise ParameterError('duration', duration, f'must cover at least one step of {dt:g} s', 's')
+    return x0, n
+
+
+def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
+             disturbance: YawRateDisturbance | None = None) -> SimResult:
+    """
+    Run ``controller`` against the kinematics (3) with forward Euler.
+
+    Per step k: the controller sees the pose and the reference at t_k and returns (v, omega);
+    then  x += v cos(theta) dt,  y += v sin(theta) dt,  theta += (omega + varpi(t_k)) dt.
+
+    Parameters
+    ----------
+    controller
+        An object with ``reset()``,
+        ``step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d) -> (v, w)``,
+        ``telemetry()`` and ``TELEMETRY_FIELDS``, stepped at its own period ``dt``;
+        with a ``period`` attribute [s], that period must equal ``dt``.
+    trajectory
+        An object with ``sample(t) -> (x_d, y_d, xdot_d, ydot_d)`` and
+        ``acceleration(t) -> (xddot_d, yddot_d)`` for arrays ``t``.
+    x0 : sequence of 3 floats
+        Initial pose (x, y, theta) [m, m, rad].
+    duration : float
+        Simulated time [s]; the run has round(duration / dt) steps.
+    dt : float
+        Step [s]; must equal the controller's period when it has one (``controller.period``).
+    disturbance : YawRateDisturbance, optional
+        Yaw-rate disturbance varpi(t); none by default.
+
+    """
+    x0, n = check_start(controller, x0, duration, dt)
+    x, y, theta = x0
+
+    t = np.arange(n) * dt
+    ref, acc = sample_reference(trajectory, t)
+    dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
+
+    controller.reset()
+    step = controller.step
+    telemetry = controller.telemetry
+    cos, sin = math.cos, math.sin
+    rows = []
+    record = rows.append
+    for (x_d, y_d, xdot_d, ydot_d), (xddot_d, yddot_d), varpi in zip(
+            ref.tolist(), acc.tolist(), dist.tolist()):
+        v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
+        record((x, y, theta, v, w) + telemetry())
+        x += v * cos(theta) * dt
+        y += v * sin(theta) * dt
+        theta += (w + varpi) * dt
+
+    columns = np.array(rows, dtype=float).reshape(n, 5 + len(controller.TELEMETRY_FIELDS)).T
+    return SimResult(
+        t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[4],
+        disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])),
+        dt=dt, final_state=np.array([x, y, theta]))

@@ -1,0 +1,118 @@
+"""
+ROS 2 node ``recorder``: every topic of a run, as published bytes, into a BagWriter.
+
+Subscriptions are raw (the CDR bytes are never deserialised) and mirror the offered
+reliability and durability. Known topics are subscribed at once; others are discovered
+every ``discovery_period``. A writer thread drains the receive queue so callbacks stay short.
+"""
+
+import importlib
+import queue
+import threading
+
+from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+from rosgraph_msgs.msg import Clock
+
+
+def message_class(type_name: str):
+    """``pkg/msg/Type`` -> the Python message class."""
+    pkg, kind, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{pkg}.{kind}'), name)
+
+
+def _policy_name(policy) -> str:
+    return policy.name.lower()
+
+
+class RecorderNode(Node):
+    """
+    Record topics into ``writer``.
+
+    Parameters
+    ----------
+    writer : BagWriter
+    known_topics : dict
+        Topic -> type name, subscribed immediately (so the first messages are not missed).
+    discovery_period : float
+        How often the graph is searched for further topics [s].
+
+    """
+
+    def __init__(self, writer: BagWriter, known_topics: dict, discovery_period: float = 0.25,
+                 **kwargs):
+        super().__init__('recorder', **kwargs)
+        self.writer = writer
+        self._queue = queue.SimpleQueue()
+        self._subscribed = {}
+        self.received = 0
+        self.last_clock_ns = 0
+        for topic, type_name in known_topics.items():
+            self._subscribe(topic, type_name, None)
+        self.create_timer(discovery_period, self._discover)
+        self._writer_thread = threading.Thread(target=self._drain, name='bag-writer', daemon=True)
+        self._writer_thread.start()
+
+    def _qos_for(self, topic: str):
+        infos = self.get_publishers_info_by_topic(topic)
+        return [i.qos_profile for i in infos]
+
+    def _subscribe(self, topic: str, type_name: str, offered) -> None:
+        offered = offered or []
+        reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
+        transient = offered and all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                    for q in offered)
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10000,
+                         reliability=ReliabilityPolicy.RELIABLE if reliable
+                         else ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL if transient
+                         else DurabilityPolicy.VOLATILE)
+        profiles = [QosProfile(history=_policy_name(q.history), depth=q.depth,
+                               reliability=_policy_name(q.reliability),
+                               durability=_policy_name(q.durability),
+                               liveliness=_policy_name(q.liveliness)) for q in offered]
+        if not profiles:
+            profiles = [QosProfile()]
+        self.writer.add_topic(topic, type_name, profiles)
+        put = self._queue.put
+        clock = self.get_clock()
+        if topic == '/clock':
+            def callback(data, topic=topic):
+                # Simulated time from the message itself: the node clock may not have taken
+                # this tick yet.
+                stamp = deserialize_message(data, Clock).clock
+                self.last_clock_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+                put((topic, clock.now().nanoseconds, data))
+        else:
+            def callback(data, topic=topic):
+                put((topic, clock.now().nanoseconds, data))
+        self._subscribed[topic] = self.create_subscription(
+            message_class(type_name), topic, callback, qos, raw=True)
+
+    def _discover(self) -> None:
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._subscribed or topic.startswith('/_') or len(types) != 1:
+                continue
+            self._subscribe(topic, types[0], self._qos_for(topic))
+
+    def _drain(self) -> None:
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            topic, stamp, data = item
+            self.writer.write(topic, stamp, data)
+            self.received += 1
+
+    def pending(self) -> int:
+        """Messages received but not yet written."""
+        return self._queue.qsize()
+
+    def close(self) -> None:
+        """Write what is queued and finish the bag (idempotent)."""
+        if self._writer_thread.is_alive():
+            self._queue.put(None)
+            self._writer_thread.join()
+        self.writer.finish()

@@ -1,0 +1,246 @@
+"""
+One tracking run as the controller node drives it, without ROS.
+
+:class:`TrackingSession` owns the controller, the reference and the steering mapping, and
+decides each tick what to command: before the first valid odometry, nothing; after it, the
+DLSMC output mapped to the four wheels; with stale or non-finite odometry, zero speed with
+the steering held, until fresh odometry returns. Trajectory time starts at the first valid
+odometry and runs on the control clock; it keeps running while the robot is stopped.
+"""
+
+from dataclasses import dataclass
+import math
+
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.steering import wheel_commands
+from nfmr_dlsmc.core.trajectories import reference_heading
+from nfmr_dlsmc.runtime.params import ControllerParams
+import numpy as np
+
+#: Field names of :attr:`TickOutput.state`, in order (the ``controller_state`` layout).
+STATE_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_r', 'x_e', 'y_e', 'theta_d',
+                'theta_e', 's_x', 's_y', 'eta_hat', 'inner_phase', 'v', 'omega', 'v_raw',
+                'omega_raw', 'v_saturated', 'omega_saturated', 'steer_limited', 'stopped',
+                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr')
+
+
+@dataclass(frozen=True)
+class TickOutput:
+    """
+    What one control tick commands.
+
+    Attributes
+    ----------
+    v, omega : float
+        Unicycle command at P [m/s], [rad/s].
+    steer : ndarray (4,)
+        Steer angles [rad], FL FR RL RR.
+    wheel_speed : ndarray (4,)
+        Wheel speeds [rad/s], FL FR RL RR.
+    state : tuple of float
+        The values named by :data:`STATE_FIELDS`.
+    stopped : bool
+        True when safety stopped the robot.
+    report : str or None
+        A message when the safety state changed (log it once).
+
+    """
+
+    v: float
+    omega: float
+    steer: np.ndarray
+    wheel_speed: np.ndarray
+    state: tuple
+    stopped: bool
+    report: str | None
+
+
+class TrackingSession:
+    """
+    Controller, reference and steering for one run.
+
+    Parameters
+    ----------
+    params : ControllerParams
+    odom_timeout : float
+        Odometry older than this [s, wall clock] stops the robot.
+    odom_frame : str
+        The frame odometry must be expressed in.
+    max_jump : float
+        Largest accepted change of position between two odometry messages [m].
+    restart_threshold : float
+        Stamps this much older [s] than the last accepted one mean the source restarted;
+        this much newer, a gap in the source. Either way the stamps are off the current
+        time base, and they are taken as the new base only once ``confirm_messages``
+        messages in a row continue from it (each within ``restart_threshold`` of the one
+        before); until then each such message stops the robot for its tick and is not used,
+        so a single stamp far in the future or the past changes nothing.
+    confirm_messages : int
+        How many messages in a row establish a new time base (>= 1).
+
+    """
+
+    def __init__(self, params: ControllerParams, odom_timeout: float, odom_frame: str = 'odom',
+                 max_jump: float = 10.0, restart_threshold: float = 1.0,
+                 confirm_messages: int = 3):
+        self.params = params
+        self.odom_timeout = odom_timeout
+        self.odom_frame = odom_frame
+        self.max_jump = max_jump
+        self.restart_threshold = restart_threshold
+        if isinstance(confirm_messages, bool) or not isinstance(confirm_messages, int) \
+                or confirm_messages < 1:
+            raise ValueError(f'confirm_messages = {confirm_messages!r}: must be an integer >= 1')
+        self.confirm_messages = confirm_messages
+        self._new_base = []  # (stamp, control time) [s] of messages off the time base
+        self.controller = DlsmcController(params.dlsmc)
+        self._pose = None  # latest valid (x, y, theta)
+        self._pose_wall = None  # wall time [s] it arrived
+        self._bad_odometry = None  # (kind, reason) while the latest odometry is invalid
+        self._stamp = None  # stamp [s] of the latest accepted odometry
+        self.restarts = 0
+        self._t0 = None  # control time [s] of the first valid odometry
+        self._t = 0.0  # trajectory time [s] of the last tick that tracked
+        self._tracked_last = False  # whether the previous tick tracked (for the step length)
+        self._steer = np.zeros(4)
+        self._fault_reported = None
+
+    @property
+    def started(self) -> bool:
+        """Whether valid odometry has arrived (trajectory time is running)."""
+        return self._t0 is not None
+
+    def set_params(self, params: ControllerParams) -> None:
+        """New gains or limits; they take effect at the next tick."""
+        self.params = params
+        self.controller.config = params.dlsmc
+
+    def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
+                    control_time: float, stamp: float | None = None,
+                    frame_id: str | None = None) -> bool:
+        """
+        Odometry of P arrived: pose [m, m, rad], its ``stamp`` and ``frame_id``, received
+        at ``wall_time`` / ``control_time`` [s].
+
+        Returns
+        -------
+        bool
+            Whether to tick on it: False only for an out-of-order message (older than the
+            last accepted one by less than ``restart_threshold``), which is ignored.
+
+        """
+        stamp = control_time if stamp is None else stamp
+        if frame_id is not None and frame_id != self.odom_frame:
+            self._bad_odometry = ('frame', f'odometry is in frame {frame_id!r}, '
+                                           f'expected {self.odom_frame!r}')
+            return True
+        if not all(math.isfinite(v) for v in (x, y, theta, stamp)):
+            self._bad_odometry = ('finite', f'odometry is not finite or its orientation is no '
+                                            f'rotation: x, y, yaw = ({x}, {y}, {theta})')
+            return True
+        restarting = False
+        if self._stamp is not None:
+            gap = stamp - self._stamp
+            if -self.restart_threshold < gap < 0.0:
+                return False  # out of order: ignore
+            if abs(gap) >= self.restart_threshold:
+                if not self._confirms_new_base(stamp, control_time):
+                    self._bad_odometry = ('stamp', f'odometry stamp {stamp:.3f} s is {gap:+.3f} s '
+                                                   'from the last accepted one: ignored until '
+                                                   f'{self.confirm_messages} messages in a row '
+                                                   'confirm a new time base')
+                    return True
+                restarting = gap < 0.0
+                control_time = self._new_base[0][1]
+            self._new_base = []
+        if restarting:
+            self._restart()
+        elif self._pose is not None:
+            jump = math.hypot(x - self._pose[0], y - self._pose[1])
+            if jump > self.max_jump:
+                self._bad_odometry = ('jump', f'odometry jumped {jump:.2f} m in one message '
+                                              f'(limit {self.max_jump:g} m)')
+                return True
+        self._bad_odometry = None
+        self._pose = (x, y, theta)
+        self._pose_wall = wall_time
+        self._stamp = stamp
+        if self._t0 is None:
+            self._t0 = control_time
+        return True
+
+    def _confirms_new_base(self, stamp: float, control_time: float) -> bool:
+        """Collect a message off the time base; True once enough continue the same base."""
+        base = self._new_base
+        if base and not 0.0 <= stamp - base[-1][0] < self.restart_threshold:
+            base.clear()  # not the same new base: start collecting again
+        base.append((stamp, control_time))
+        return len(base) >= self.confirm_messages
+
+    def _restart(self) -> None:
+        """The odometry source started over: so does tracking."""
+        self.controller.reset()
+        self._pose = self._t0 = None
+        self._t = 0.0
+        self._tracked_last = False
+        self._fault_reported = ('restart', self.restarts)
+        self.restarts += 1
+
+    def odometry_age(self, wall_time: float) -> float:
+        """Wall time [s] since the latest valid odometry (inf before any)."""
+        return math.inf if self._pose_wall is None else wall_time - self._pose_wall
+
+    def _fault(self, wall_time: float) -> tuple | None:
+        """(kind, reason) of what stops the robot now, or None."""
+        if self._bad_odometry is not None:
+            return self._bad_odometry
+        age = self.odometry_age(wall_time)
+        if age > self.odom_timeout:
+            return 'stale', f'odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)'
+        return None
+
+    def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
+        """The command for this tick, or None before the first valid odometry."""
+        if self._t0 is None:
+            return None
+        fault = self._fault(wall_time)
+        kind = None if fault is None else fault[0]
+        report = None
+        if kind != self._fault_reported:  # log each fault once, not each tick it lasts
+            if fault:
+                report = f'stopping the robot: {fault[1]}'
+            elif isinstance(self._fault_reported, tuple):
+                report = 'odometry restarted (its stamps went back): tracking starts over'
+            else:
+                report = 'valid odometry: tracking resumed'
+            self._fault_reported = kind
+        previous_t = self._t if self._tracked_last else None
+        if not fault:
+            self._t = control_time - self._t0
+        self._tracked_last = not fault
+        t = self._t  # a stopped robot reports where tracking stopped
+        # The measured step, so that a jittery loop integrates over the time that passed;
+        # the nominal period for the first tick after a start or a stop.
+        step = None if previous_t is None else t - previous_t
+        if step is not None and not 0.0 < step <= 100.0 * self.params.dlsmc.dt:
+            step = None
+        x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
+        xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
+        x, y, theta = self._pose
+        ctrl = self.controller
+        if fault:
+            v = omega = 0.0
+            steer, wheels = self._steer.copy(), np.zeros(4)
+            limited = False
+        else:
+            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step, xddot_d, yddot_d)
+            cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
+                                 hold_steer=self._steer)
+            steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
+            self._steer = steer
+        state = (t, x, y, theta, x_d, y_d, float(reference_heading(xdot_d, ydot_d)),
+                 ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
+                 ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
+                 ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
+                 float(limited), float(bool(fault))) + tuple(steer.tolist())
+        return TickOutput(v, omega, steer, wheels, state, bool(fault), report)
