@@ -1,6 +1,5 @@
 """
-Studies over many runs: the comparison scenarios, metrics, report and figures, and
-the baseline gain search.
+Studies over many runs: comparison scenarios, metrics, report, figures, gain search.
 
 May import every layer below ROS (core, baselines, plants, runtime, bag) and matplotlib.
 """

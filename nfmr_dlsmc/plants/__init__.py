@@ -1,6 +1,7 @@
 """
-Plants a controller drives in one process: the kinematic model, the batch model, and
-robot simulators registered by other packages (:mod:`nfmr_dlsmc.plants.registry`).
+Plants a controller drives in one process.
 
-May import :mod:`nfmr_dlsmc.core` (and scipy); never a simulator package directly.
+The kinematic model, the batch model, and robot simulators registered by other packages
+(:mod:`nfmr_dlsmc.plants.registry`). May import :mod:`nfmr_dlsmc.core` (and scipy); never a
+simulator package directly.
 """

@@ -53,7 +53,7 @@ class RobotPlant:
 
 def robot_plant(name: str) -> RobotPlant:
     """
-    The installed plant registered as ``name``.
+    Return the installed plant registered as ``name``.
 
     Raises
     ------

@@ -1,6 +1,6 @@
 """
-Node logic without ROS: parameter files, the tracking session, loop statistics, the
-worker pool of the parallel commands.
+Node logic without ROS.
 
-May import core, baselines and plants (and PyYAML).
+Parameter files, the tracking session, loop statistics, the worker pool of the parallel
+commands, the installed files. May import core, baselines and plants (and PyYAML).
 """
