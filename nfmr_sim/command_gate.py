@@ -58,7 +58,7 @@ class Rejection:
 
     @property
     def kind(self) -> tuple:
-        """(topic, rule): a run of rejections of one kind is reported once."""
+        """Return (topic, rule): a run of rejections of one kind is reported once."""
         return self.topic, self.rule
 
     def __str__(self) -> str:
@@ -67,7 +67,7 @@ class Rejection:
 
 
 def _first_out_of_bounds(values: np.ndarray, bound: float) -> int | None:
-    """Index of the first value that is NaN or beyond +-``bound`` (inf included), or None."""
+    """Return the index of the first value that is NaN or beyond +-``bound``, or None."""
     bad = np.flatnonzero(~(np.abs(values) <= bound))
     return int(bad[0]) if bad.size else None
 
@@ -90,12 +90,12 @@ def _check_array(values, topic: str, unit: str, bound: float,
 
 
 def check_steer(values, steer_limit: float) -> np.ndarray | Rejection:
-    """Four steer angles [rad], FL FR RL RR, each finite and within +-``steer_limit`` [rad]."""
+    """Check four steer angles [rad], FL FR RL RR: finite, within +-``steer_limit`` [rad]."""
     return _check_array(values, STEER_TOPIC, 'rad', steer_limit, 'chassis.steer_limit')
 
 
 def check_wheel_speed(values, max_wheel_speed: float) -> np.ndarray | Rejection:
-    """Four drive speeds [rad/s], each finite and within +-``max_wheel_speed`` [rad/s]."""
+    """Check four drive speeds [rad/s]: finite, within +-``max_wheel_speed`` [rad/s]."""
     return _check_array(values, WHEEL_TOPIC, 'rad/s', max_wheel_speed,
                         'motors.max_wheel_speed')
 
@@ -103,7 +103,7 @@ def check_wheel_speed(values, max_wheel_speed: float) -> np.ndarray | Rejection:
 def map_twist(vx: float, vy: float, wz: float, geometry: RobotGeometry, offset: float,
               max_wheel_speed: float, hold_steer=None):
     """
-    The wheel commands of the body twist of P, or why there are none.
+    Return the wheel commands of the body twist of P, or why there are none.
 
     Parameters
     ----------
@@ -189,29 +189,31 @@ class CommandGate:
     # -- inputs (called from subscription callbacks) ----------------------------------------
 
     def offer_steer(self, values, now: float) -> None:
-        """A steer-position command [rad] x4 arrived at sim time ``now`` [s]."""
+        """Take a steer-position command [rad] x4 that arrived at sim time ``now`` [s]."""
         with self._cond:
-            checked = check_steer(values, self.geometry.steer_limit)
-            if isinstance(checked, Rejection):
-                self._reject(checked)
-                return
-            self._steer, self._new_steer = checked, True
-            if self._wheels is not None:
-                self._accept(now)
+            self._offer_per_wheel(check_steer(values, self.geometry.steer_limit), now,
+                                  steer=True)
 
     def offer_wheels(self, values, now: float) -> None:
-        """A wheel-velocity command [rad/s] x4 arrived."""
+        """Take a wheel-velocity command [rad/s] x4 that arrived at sim time ``now`` [s]."""
         with self._cond:
-            checked = check_wheel_speed(values, self.max_wheel_speed)
-            if isinstance(checked, Rejection):
-                self._reject(checked)
-                return
+            self._offer_per_wheel(check_wheel_speed(values, self.max_wheel_speed), now,
+                                  steer=False)
+
+    def _offer_per_wheel(self, checked, now: float, steer: bool) -> None:
+        """Keep one of the two per-wheel arrays (or reject it); accept once both are held."""
+        if isinstance(checked, Rejection):
+            self._reject(checked)
+            return
+        if steer:
+            self._steer, self._new_steer = checked, True
+        else:
             self._wheels, self._new_wheels = checked, True
-            if self._steer is not None:
-                self._accept(now)
+        if self._steer is not None and self._wheels is not None:
+            self._accept(now)
 
     def offer_twist(self, vx: float, vy: float, wz: float, now: float) -> None:
-        """A body twist of P (m/s, m/s, rad/s) arrived; mapped through the steering geometry."""
+        """Take a body twist of P (m/s, m/s, rad/s), mapped through the steering geometry."""
         with self._cond:
             mapped = map_twist(vx, vy, wz, self.geometry, self.offset, self.max_wheel_speed,
                                hold_steer=self._steer)
@@ -239,8 +241,10 @@ class CommandGate:
 
     def wait_for_step_command(self, timeout: float) -> bool:
         """
-        Lockstep: wait up to ``timeout`` wall seconds for this step's command: both
-        per-wheel arrays, one twist, or a rejected message. True if one arrived.
+        Wait up to ``timeout`` wall seconds for this step's command (lockstep).
+
+        The command is both per-wheel arrays, one twist, or a rejected message; True if one
+        arrived.
         """
         with self._cond:
             return self._cond.wait_for(
@@ -249,7 +253,7 @@ class CommandGate:
 
     def take(self, now: float):
         """
-        The command to apply at sim time ``now``, or None to brake.
+        Return the command to apply at sim time ``now``, or None to brake.
 
         Returns
         -------

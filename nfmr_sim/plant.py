@@ -125,8 +125,9 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
 
 def world_rtf(sim_seconds: float) -> dict:
     """
-    Step the chassis world for ``sim_seconds`` [s] under a constant double-Ackermann turn
-    (v = 1 m/s, omega = 0.5 rad/s, j1 = 1, j2 = 0), open loop.
+    Time the chassis world over ``sim_seconds`` [s] of a constant double-Ackermann turn.
+
+    Open loop: v = 1 m/s, omega = 0.5 rad/s, j1 = 1, j2 = 0.
     """
     with ChassisWorld() as world:
         cmd = wheel_commands(1.0, 0.5, RobotGeometry(), SteerMode(1.0, 0.0))

@@ -12,7 +12,7 @@ import numpy as np
 def render_chassis(world: ChassisWorld, width: int = 800, height: int = 600,
                    distance: float = 2.2, yaw_deg: float = 35.0,
                    pitch_deg: float = -30.0) -> np.ndarray:
-    """An RGB image (height, width, 3) of the robot, camera aimed at its centre."""
+    """Return an RGB image (height, width, 3) of the robot, camera aimed at its centre."""
     c = world.client
     pos, _ = c.getBasePositionAndOrientation(world.robot)
     view = c.computeViewMatrixFromYawPitchRoll(pos, distance, yaw_deg, pitch_deg, 0.0, 2)

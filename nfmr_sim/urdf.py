@@ -9,60 +9,45 @@ and per wheel ``<wheel>_steer_link`` (revolute about z, limited) carrying
 
 from dataclasses import dataclass
 import math
+from typing import ClassVar
 
-from nfmr_dlsmc.core.steering import WHEEL_NAMES
-from nfmr_dlsmc.core.validation import check_positive, ParameterError
+from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
+from nfmr_dlsmc.core.steering import RobotGeometry, WHEEL_NAMES
+from nfmr_dlsmc.core.validation import ParameterError
 
 
+@documented
 @dataclass(frozen=True)
-class ChassisConfig:
+class ChassisConfig(RobotGeometry):
     """
-    Dimensions and masses of the chassis.
+    Dimensions and masses of the simulated chassis: the wheel geometry and what pybullet needs.
 
-    Attributes
-    ----------
-    wheelbase, track : float
-        Wheel contact rectangle [m] (Table 1: length 0.89 m, width 0.53 m).
-    wheel_radius, wheel_width : float
-        [m] (Table 1: wheel diameter 0.28 m).
-    total_mass : float
-        Mass of the whole robot [kg] (Table 1: 1 t).
-    wheel_mass, steer_mass : float
-        Mass of each wheel and of each steering knuckle [kg], part of ``total_mass``.
-    body_height : float
-        Height of the chassis box [m]; its bottom is at axle height. The chassis mass is
-        lumped at axle height (a low centre of mass, as on a loaded AGV), which is also
-        where pybullet places the base position.
-    yaw_inertia : float or None
-        Izz of the chassis box [kg m^2]; None: that of a uniform box.
-    steer_limit : float
-        Steer joint range +-limit [rad].
-
+    The wheel geometry (wheelbase, track, wheel radius, steer limit) is the controller's
+    :class:`~nfmr_dlsmc.core.steering.RobotGeometry`, declared there once; here its
+    parameters are named ``chassis.*``. The chassis box's bottom is at axle height and its
+    mass is lumped there (a low centre of mass, as on a loaded AGV), which is also where
+    pybullet places the base position.
     """
 
-    wheelbase: float = 0.89
-    track: float = 0.53
-    wheel_radius: float = 0.14
-    wheel_width: float = 0.10
-    total_mass: float = 1000.0
-    wheel_mass: float = 20.0
-    steer_mass: float = 5.0
-    body_height: float = 0.20
-    yaw_inertia: float | None = None
-    steer_limit: float = math.pi / 2
+    prefix: ClassVar[str] = 'chassis'
+
+    wheel_width: float = param(0.10, 'm', 'tyre width', POSITIVE, read_only=True)
+    total_mass: float = param(1000.0, 'kg', 'mass of the whole robot (Table 1: 1 t)',
+                              POSITIVE, also='> 4 (wheel_mass + steer_mass)', read_only=True)
+    wheel_mass: float = param(20.0, 'kg', 'mass of each wheel, part of total_mass', POSITIVE,
+                              read_only=True)
+    steer_mass: float = param(5.0, 'kg', 'mass of each steering knuckle, part of total_mass',
+                              POSITIVE, read_only=True)
+    body_height: float = param(0.20, 'm', 'height of the chassis box', POSITIVE,
+                               read_only=True)
+    yaw_inertia: float = param(0.0, 'kg m^2', 'Izz of the chassis box (0: that of a uniform '
+                               'box)', NON_NEGATIVE, read_only=True)
 
     def __post_init__(self):
-        for name in ('wheelbase', 'track', 'wheel_radius', 'wheel_width', 'total_mass',
-                     'wheel_mass', 'steer_mass', 'body_height', 'steer_limit'):
-            check_positive(f'chassis.{name}', getattr(self, name))
+        check_fields(self)
         if self.body_mass <= 0.0:
-            raise ParameterError('chassis.total_mass', self.total_mass,
+            raise ParameterError(f'{self.prefix}.total_mass', self.total_mass,
                                  'must exceed the four wheels and steering knuckles', 'kg')
-        if self.yaw_inertia is not None:
-            check_positive('chassis.yaw_inertia', self.yaw_inertia, 'kg m^2')
-        if self.steer_limit > math.pi / 2:
-            raise ParameterError('chassis.steer_limit', self.steer_limit, 'must be <= pi/2',
-                                 'rad')
 
     @property
     def body_mass(self) -> float:
@@ -82,10 +67,11 @@ def _inertial(mass, ixx, iyy, izz, xyz='0 0 0'):
 
 
 def chassis_urdf(cfg: ChassisConfig) -> str:
-    """The URDF text of the chassis."""
-    length, width, height = cfg.wheelbase + 0.1, cfg.track - cfg.wheel_width - 0.02, cfg.body_height
+    """Return the URDF text of the chassis."""
+    length, width = cfg.wheelbase + 0.1, cfg.track - cfg.wheel_width - 0.02
+    height = cfg.body_height
     ixx, iyy, izz = _inertia_box(cfg.body_mass, length, width, height)
-    if cfg.yaw_inertia is not None:
+    if cfg.yaw_inertia > 0.0:
         izz = cfg.yaw_inertia
     box_z = 0.5 * height
     parts = ['<?xml version="1.0"?>', '<robot name="nfmr_4wis">',

@@ -165,17 +165,17 @@ class ChassisWorld:
 
     @property
     def time(self) -> float:
-        """Simulated time [s]."""
+        """Return the simulated time [s]."""
         return self._time
 
     @property
     def client(self) -> BulletClient:
-        """The pybullet client (for rendering and inspection)."""
+        """Return the pybullet client, for rendering and inspection."""
         return self._client
 
     @property
     def robot(self) -> int:
-        """Pybullet body id of the chassis."""
+        """Return the pybullet body id of the chassis."""
         return self._robot
 
     # -- commands --------------------------------------------------------------------------
@@ -274,7 +274,7 @@ class ChassisWorld:
         return p, centre
 
     def observe(self, active: tuple = ()) -> StepOutput:
-        """The current state as a :class:`StepOutput` (``step`` returns this after stepping)."""
+        """Return the current state as a :class:`StepOutput` (``step`` returns it too)."""
         c, cfg = self._client, self.config
         point_p, centre = self._planar(cfg.tracked_point_offset)
         states = c.getJointStates(self._robot, self._joints)
@@ -294,7 +294,8 @@ class ChassisWorld:
     def _odometry(self, truth: PlanarState) -> PlanarState:
         d = self.config.disturbance
         if d.odom_position_noise > 0.0 or d.odom_yaw_noise > 0.0:
-            nx, ny = self._rng.normal(0.0, d.odom_position_noise, 2) if d.odom_position_noise else (0.0, 0.0)
+            nx, ny = (self._rng.normal(0.0, d.odom_position_noise, 2)
+                      if d.odom_position_noise else (0.0, 0.0))
             nyaw = self._rng.normal(0.0, d.odom_yaw_noise) if d.odom_yaw_noise else 0.0
             truth = PlanarState(truth.x + nx, truth.y + ny,
                                 math.remainder(truth.yaw + nyaw, 2 * math.pi),

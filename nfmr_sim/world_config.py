@@ -1,50 +1,59 @@
 """Frozen, validated configuration of the simulated world: motors, contacts, disturbances."""
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
-from nfmr_dlsmc.core.steering import SteerMode
-from nfmr_dlsmc.core.validation import (
-    check_finite,
-    check_non_negative,
-    check_positive,
-    ParameterError,
+from nfmr_dlsmc.core.schema import (
+    at_least,
+    check_fields,
+    documented,
+    FINITE,
+    NON_NEGATIVE,
+    param,
+    POSITIVE,
+    positive_up_to,
 )
+from nfmr_dlsmc.core.steering import SteerMode
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_sim.urdf import ChassisConfig
 
 
+@documented
 @dataclass(frozen=True)
 class MotorConfig:
     """
     Steer and drive motors (paper Table 1: rated torque 20 Nm per motor).
 
-    Attributes
-    ----------
-    rated_torque : float
-        Motor torque [Nm].
-    drive_gear_ratio, steer_gear_ratio : float
-        Gearbox ratios; the joint torque limit is rated_torque * ratio [Nm].
-    steer_rate_limit : float
-        Largest steer joint speed [rad/s].
-    steer_position_gain, steer_velocity_gain : float
-        pybullet POSITION_CONTROL gains (dimensionless, per step).
-    steer_lag : float
-        Time constant [s] of a first-order lag on the steer command (0: none).
-
+    ``max_wheel_speed`` bounds what the sim obeys, not the world: a command beyond it is
+    rejected (:mod:`nfmr_sim.command_gate`). Its default, 50 rad/s (7 m/s at the 0.14 m
+    tyre), is 2.5 times the fastest wheel that the robot profile's limits (v_max 2 m/s,
+    omega_max 1.59 rad/s) ask for: 20 rad/s.
     """
 
-    rated_torque: float = 20.0
-    drive_gear_ratio: float = 10.0
-    steer_gear_ratio: float = 50.0
-    steer_rate_limit: float = 20.0
-    steer_position_gain: float = 1.0
-    steer_velocity_gain: float = 1.0
-    steer_lag: float = 0.0
+    prefix: ClassVar[str] = 'motors'
+
+    rated_torque: float = param(20.0, 'Nm', 'rated torque of each motor (Table 1)', POSITIVE,
+                                read_only=True)
+    drive_gear_ratio: float = param(10.0, '', 'drive gearbox ratio; the drive joint torque '
+                                    'limit is rated_torque * ratio', POSITIVE, read_only=True)
+    steer_gear_ratio: float = param(50.0, '', 'steer gearbox ratio; the steer joint torque '
+                                    'limit is rated_torque * ratio', POSITIVE, read_only=True)
+    steer_rate_limit: float = param(20.0, 'rad/s', 'largest steer joint speed (doc/design.md, '
+                                    'D9)', POSITIVE, read_only=True)
+    steer_position_gain: float = param(1.0, '', 'pybullet POSITION_CONTROL position gain of '
+                                       'the steer joints (per step)', POSITIVE,
+                                       read_only=True)
+    steer_velocity_gain: float = param(1.0, '', 'pybullet POSITION_CONTROL velocity gain of '
+                                       'the steer joints (per step)', POSITIVE,
+                                       read_only=True)
+    steer_lag: float = param(0.0, 's', 'time constant of a first-order lag on the steer '
+                             'command (0: none)', NON_NEGATIVE, read_only=True)
+    max_wheel_speed: float = param(50.0, 'rad/s', 'largest |drive joint speed| a command may '
+                                   'ask for; faster commands, and cmd_vel twists mapping to '
+                                   'them, are rejected and brake the wheels', POSITIVE)
 
     def __post_init__(self):
-        for name in ('rated_torque', 'drive_gear_ratio', 'steer_gear_ratio',
-                     'steer_rate_limit', 'steer_position_gain', 'steer_velocity_gain'):
-            check_positive(f'motors.{name}', getattr(self, name))
-        check_non_negative('motors.steer_lag', self.steer_lag, 's')
+        check_fields(self)
 
     @property
     def drive_torque_limit(self) -> float:
@@ -57,149 +66,117 @@ class MotorConfig:
         return self.rated_torque * self.steer_gear_ratio
 
 
+@documented
 @dataclass(frozen=True)
 class FrictionPatch:
-    """
-    A rectangle of the ground [m] with its own lateral friction coefficient.
+    """A rectangle of the ground with its own friction: a 1 mm box lying on the ground."""
 
-    Modelled as a 1 mm thick box lying on the ground plane.
-    """
+    prefix: ClassVar[str] = 'friction.patch'
 
-    x_min: float
-    x_max: float
-    y_min: float
-    y_max: float
-    lateral: float = 0.2
+    x_min: float = param(unit='m', description='least x of the rectangle', rule=FINITE)
+    x_max: float = param(unit='m', description='largest x of the rectangle', rule=FINITE,
+                         also='> x_min')
+    y_min: float = param(unit='m', description='least y of the rectangle', rule=FINITE)
+    y_max: float = param(unit='m', description='largest y of the rectangle', rule=FINITE,
+                         also='> y_min')
+    lateral: float = param(0.2, '', 'Coulomb friction coefficient of the tyres on it',
+                           POSITIVE)
 
     def __post_init__(self):
-        for name in ('x_min', 'x_max', 'y_min', 'y_max'):
-            check_finite(f'friction.patch.{name}', getattr(self, name), 'm')
+        check_fields(self)
+        n = self.prefix
         if self.x_max <= self.x_min:
-            raise ParameterError('friction.patch.x_max', self.x_max, f'must be > x_min = {self.x_min}', 'm')
+            raise ParameterError(f'{n}.x_max', self.x_max, f'must be > x_min = {self.x_min}',
+                                 'm')
         if self.y_max <= self.y_min:
-            raise ParameterError('friction.patch.y_max', self.y_max, f'must be > y_min = {self.y_min}', 'm')
-        check_positive('friction.patch.lateral', self.lateral)
+            raise ParameterError(f'{n}.y_max', self.y_max, f'must be > y_min = {self.y_min}',
+                                 'm')
 
 
+@documented
 @dataclass(frozen=True)
 class FrictionConfig:
-    """
-    Wheel-ground friction coefficients (Bullet multiplies wheel and ground values).
+    """Wheel-ground friction coefficients (Bullet multiplies wheel and ground values)."""
 
-    Attributes
-    ----------
-    lateral : float
-        Coulomb friction coefficient of the tyres on the ground.
-    rolling : float
-        Rolling friction [m] (Bullet's rolling resistance lever arm).
-    spinning : float
-        Spinning (torsional) friction [m], resisting steering on the spot.
-    patches : tuple of FrictionPatch
-        Regions of different friction.
+    prefix: ClassVar[str] = 'friction'
 
-    """
-
-    lateral: float = 1.0
-    rolling: float = 0.0
-    spinning: float = 0.0
-    patches: tuple[FrictionPatch, ...] = ()
+    lateral: float = param(1.0, '', 'Coulomb friction coefficient of the tyres on the ground',
+                           POSITIVE, read_only=True)
+    rolling: float = param(0.0, 'm', "rolling friction (Bullet's rolling resistance lever "
+                           'arm)', NON_NEGATIVE, read_only=True)
+    spinning: float = param(0.0, 'm', 'spinning (torsional) friction, resisting steering on '
+                            'the spot', NON_NEGATIVE, read_only=True)
+    patches: tuple[FrictionPatch, ...] = param((), description='ground rectangles of other '
+                                               'friction', record=FrictionPatch,
+                                               read_only=True)
 
     def __post_init__(self):
-        check_positive('friction.lateral', self.lateral)
-        for name in ('rolling', 'spinning'):
-            check_non_negative(f'friction.{name}', getattr(self, name), 'm')
+        check_fields(self)
 
 
+@documented
 @dataclass(frozen=True)
 class ForcePulse:
     """
-    An external force [N] (world frame) and yaw torque [Nm] on the chassis for a while.
+    An external force (world frame) and yaw torque on the chassis for a while.
 
-    Tyre contacts are rigid Coulomb contacts: a yaw torque moves the robot only once it
-    exceeds what the tyres' grip resists (about 4.5 kNm for the default 1 t robot on
-    mu = 1), and then it slides. Use a low-friction patch or a lower ``friction.lateral``
-    to study milder yaw disturbances.
-
-    Attributes
-    ----------
-    start, duration : float
-        Active on [start, start + duration) [s].
-    force_x, force_y : float
-        World-frame force at the chassis centre [N].
-    yaw_torque : float
-        Torque about the world z axis [Nm].
-
+    Active on [start, start + duration). Tyre contacts are rigid Coulomb contacts: a yaw
+    torque moves the robot only once it exceeds what the tyres' grip resists (about
+    4.5 kNm for the default 1 t robot on mu = 1), and then it slides. Use a low-friction
+    patch or a lower ``friction.lateral`` to study milder yaw disturbances.
     """
 
-    start: float
-    duration: float
-    force_x: float = 0.0
-    force_y: float = 0.0
-    yaw_torque: float = 0.0
+    prefix: ClassVar[str] = 'disturbance.pulse'
+
+    start: float = param(unit='s', description='when the pulse begins', rule=FINITE)
+    duration: float = param(unit='s', description='how long it acts', rule=POSITIVE)
+    force_x: float = param(0.0, 'N', 'world-frame force at the chassis centre, x', FINITE)
+    force_y: float = param(0.0, 'N', 'world-frame force at the chassis centre, y', FINITE)
+    yaw_torque: float = param(0.0, 'Nm', 'torque about the world z axis', FINITE)
 
     def __post_init__(self):
-        check_finite('disturbance.pulse.start', self.start, 's')
-        check_positive('disturbance.pulse.duration', self.duration, 's')
-        for name, unit in (('force_x', 'N'), ('force_y', 'N'), ('yaw_torque', 'Nm')):
-            check_finite(f'disturbance.pulse.{name}', getattr(self, name), unit)
+        check_fields(self)
 
     def active(self, t: float) -> bool:
-        """Whether the pulse acts at time t [s]."""
+        """Tell whether the pulse acts at time t [s]."""
         return self.start <= t < self.start + self.duration
 
 
+@documented
 @dataclass(frozen=True)
 class DisturbanceConfig:
-    """
-    The disturbance schedule, seeded so that a run is reproducible.
+    """The disturbance schedule, seeded so that a run is reproducible."""
 
-    Attributes
-    ----------
-    pulses : tuple of ForcePulse
-    constant_force_x, constant_force_y : float
-        A persistent world-frame force on the chassis [N] (e.g. a slope).
-    odom_position_noise, odom_yaw_noise : float
-        Standard deviations of Gaussian odometry noise [m], [rad].
-    odom_latency_steps : int
-        Odometry is this many physics steps old.
-    seed : int
-        Seed of the noise generator.
+    prefix: ClassVar[str] = 'disturbance'
 
-    """
-
-    pulses: tuple[ForcePulse, ...] = ()
-    constant_force_x: float = 0.0
-    constant_force_y: float = 0.0
-    odom_position_noise: float = 0.0
-    odom_yaw_noise: float = 0.0
-    odom_latency_steps: int = 0
-    seed: int = 0
+    pulses: tuple[ForcePulse, ...] = param((), description='force and yaw-torque pulses on '
+                                           'the chassis', record=ForcePulse)
+    constant_force_x: float = param(0.0, 'N', 'persistent world-frame force on the chassis, '
+                                    'x (e.g. a slope)', FINITE)
+    constant_force_y: float = param(0.0, 'N', 'persistent world-frame force on the chassis, '
+                                    'y', FINITE)
+    odom_position_noise: float = param(0.0, 'm', 'standard deviation of Gaussian noise on '
+                                       'the odometry position', NON_NEGATIVE)
+    odom_yaw_noise: float = param(0.0, 'rad', 'standard deviation of Gaussian noise on the '
+                                  'odometry yaw', NON_NEGATIVE)
+    odom_latency_steps: int = param(0, '', 'odometry is this many physics steps old',
+                                    at_least(0), read_only=True)
+    seed: int = param(0, '', 'seed of the odometry noise generator', at_least(0),
+                      read_only=True)
 
     def __post_init__(self):
-        check_finite('disturbance.constant_force_x', self.constant_force_x, 'N')
-        check_finite('disturbance.constant_force_y', self.constant_force_y, 'N')
-        for name, unit in (('odom_position_noise', 'm'), ('odom_yaw_noise', 'rad')):
-            check_non_negative(f'disturbance.{name}', getattr(self, name), unit)
-        for name in ('odom_latency_steps', 'seed'):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ParameterError(f'disturbance.{name}', value, 'must be an integer >= 0')
+        check_fields(self)
 
 
+@documented
 @dataclass(frozen=True)
 class WorldConfig:
     """
     Everything the simulated world is built from.
 
-    Attributes
-    ----------
-    chassis, motors, friction, disturbance
-        The parts above.
-    steer_mode : SteerMode
-        Sets the tracked point P (doc/design.md, D2) whose pose the odometry reports.
-    physics_dt : float
-        Physics step [s].
-
+    ``chassis``, ``motors``, ``friction`` and ``disturbance`` are the parts above;
+    ``steer_mode`` sets the tracked point P (doc/design.md, D2) whose pose the odometry
+    reports.
     """
 
     chassis: ChassisConfig = field(default_factory=ChassisConfig)
@@ -207,12 +184,12 @@ class WorldConfig:
     friction: FrictionConfig = field(default_factory=FrictionConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
     steer_mode: SteerMode = field(default_factory=SteerMode)
-    physics_dt: float = 0.001
+    physics_dt: float = param(0.001, 's', 'physics step',
+                              positive_up_to(0.01, '0.01', inclusive=True,
+                                             why=' for stable contacts'), read_only=True)
 
     def __post_init__(self):
-        dt = check_positive('physics_dt', self.physics_dt, 's')
-        if dt > 0.01:
-            raise ParameterError('physics_dt', self.physics_dt, 'must be <= 0.01 for stable contacts', 's')
+        check_fields(self)
 
     @property
     def tracked_point_offset(self) -> float:
@@ -220,5 +197,3 @@ class WorldConfig:
         if self.steer_mode.is_crab:
             return 0.0
         return self.steer_mode.zero_slip_offset(self.chassis.wheelbase)
-
-

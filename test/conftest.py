@@ -1,7 +1,39 @@
-"""Keep this test session's DDS traffic to itself: loopback only, a domain of its own."""
+"""
+Shared test set-up: this session's DDS traffic kept to itself, and an open-loop controller.
+
+DDS: loopback only, a domain of its own.
+"""
 
 import os
 import random
 
+import pytest
+
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.SystemRandom().randint(1, 100)))
+
+
+class _ConstantInputs:
+    """A controller that always commands the same (v [m/s], omega [rad/s]): isolates the plant."""
+
+    TELEMETRY_FIELDS = ('theta_d', 'omega_saturated')
+
+    def __init__(self, v, omega):
+        self.v, self.omega = v, omega
+
+    def reset(self):
+        """Do nothing: the controller has no state."""
+
+    def step(self, *_):
+        """Return the constant (v, omega)."""
+        return self.v, self.omega
+
+    def telemetry(self):
+        """Return a theta_d of 0 and no saturation."""
+        return (0.0, 0.0)
+
+
+@pytest.fixture
+def constant_inputs():
+    """Return the open-loop controller class; an instance is made from (v, omega)."""
+    return _ConstantInputs

@@ -5,8 +5,10 @@ import dataclasses
 
 def plain(value):
     """
-    Any decoded message (rclpy, mcap_ros2, rosbags) -> nested dicts and lists of numbers
-    and strings, so that three decoders can be compared field by field.
+    Return a decoded message (rclpy, mcap_ros2, rosbags) as nested dicts and lists.
+
+    Their leaves are numbers and strings, so that three decoders can be compared field by
+    field.
     """
     if hasattr(value, 'get_fields_and_field_types'):  # rclpy
         return {k: plain(getattr(value, k)) for k in value.get_fields_and_field_types()}

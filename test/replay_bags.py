@@ -56,8 +56,10 @@ def _message(type_name: str, topic: str, k: int):
 
 def write_qos_bag(directory, topics: dict, count: int = 20, period_ns: int = 50_000_000):
     """
-    A bag of ``count`` distinct messages per topic, every ``period_ns``, the topics
-    declared with their profiles; returns topic -> the CDR bytes written, in order.
+    Write a bag of ``count`` distinct messages per topic, every ``period_ns``.
+
+    The topics are declared with their profiles; returns topic -> the CDR bytes written,
+    in order.
     """
     written = {topic: [] for topic in topics}
     with BagWriter(directory) as writer:
@@ -73,8 +75,9 @@ def write_qos_bag(directory, topics: dict, count: int = 20, period_ns: int = 50_
 
 class RawSubscriber(Node):
     """
-    Subscribe to ``topics`` (as in ``RUN_TOPICS``) with the reliability and durability
-    each asks for, keeping the received bytes per topic.
+    Subscribe to ``topics`` (as in ``RUN_TOPICS``), keeping the received bytes per topic.
+
+    Each topic is subscribed with the reliability and durability it asks for.
     """
 
     def __init__(self, topics: dict, **kwargs):

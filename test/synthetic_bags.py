@@ -11,7 +11,7 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 
 def state_rows(result) -> np.ndarray:
-    """The controller_state rows a node would have published for a kinematic run."""
+    """Return the controller_state rows a node would have published for a kinematic run."""
     tel = result.telemetry
     n = len(result.t)
     columns = {'t': result.t, 'x': result.state[:, 0], 'y': result.state[:, 1],
@@ -29,8 +29,10 @@ def state_rows(result) -> np.ndarray:
 def write_run_bag(directory, result, every: int = 1, chunk_size: int = 1 << 20,
                   with_odom: bool = True):
     """
-    A bag of /controller_state (and /odom) messages of a kinematic run, every
-    ``every``-th step; returns the messages written as (topic, log time, bytes).
+    Write a bag of /controller_state (and /odom) messages of a kinematic run.
+
+    One message every ``every``-th step; returns the messages written as (topic, log
+    time, bytes).
     """
     written = []
     dim = [MultiArrayDimension(label=','.join(STATE_FIELDS), size=len(STATE_FIELDS),

@@ -18,7 +18,7 @@ REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 
 
 def cut_bag(tmp_path, keep_fraction=0.7):
-    """A bag whose writer never finished, cut inside a chunk, without metadata.yaml."""
+    """Write a bag whose writer never finished, cut inside a chunk, without metadata.yaml."""
     bag = tmp_path / 'bag'
     writer = BagWriter(bag, chunk_size=4096)
     writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray',

@@ -1,6 +1,7 @@
 """
-Tests that catch the bugs that matter: each one kills a plausible mutant that the rest
-of the suite let through (the mutant it kills is named in each docstring).
+Tests that catch the bugs that matter: each kills a plausible mutant the rest let through.
+
+The mutant each one kills is named in its docstring.
 
 Golden numbers come from the paper (Zhang et al. 2023, Table 2), from hand computation or
 from an independent computation (a closed form of the same recurrence). Where a figure is
@@ -76,8 +77,10 @@ def test_inner_loop_phase_switch_at_half_eps_and_fallback_at_eps_by_hand():
 @pytest.mark.parametrize('s', [0.0051, 0.0075, 0.0099])
 def test_between_half_eps_and_eps_the_gain_keeps_integrating(s):
     """
-    Kills M1: a fresh loop held at eps/2 < |s| < eps never reaches t_bar; its eta_hat
-    is the integral of L0 + L1 |s| (hand value k dt (L0 + L1 |s|) after k steps).
+    Kills M1: a fresh loop held at eps/2 < |s| < eps never reaches t_bar.
+
+    Its eta_hat is the integral of L0 + L1 |s| (hand value k dt (L0 + L1 |s|) after k
+    steps).
     """
     loop = AbfsmcInnerLoop(InnerLoopGains())
     for k in range(50):
@@ -210,8 +213,9 @@ def test_case1_table2_and_the_inner_loop_figures(case1):
 
 def test_case2_theta_e_stays_inside_eps_after_convergence():
     """
-    Paper Case 2: x0 = (1, 1, pi/6), pulses of 0.5 rad/s on [5, 5.5) and [50, 50.5) s;
-    after convergence |theta_e| < eps = 0.01 rad (the second pulse included).
+    Paper Case 2: after convergence |theta_e| < eps = 0.01 rad, the second pulse included.
+
+    x0 = (1, 1, pi/6), pulses of 0.5 rad/s on [5, 5.5) and [50, 50.5) s.
     """
     r = simulate(DlsmcController(), Sine(), (1.0, 1.0, math.pi / 6), 100.0, 0.001,
                  paper_disturbance())
@@ -222,36 +226,20 @@ def test_case2_theta_e_stays_inside_eps_after_convergence():
 
 # -- M4: forward Euler in the kinematic simulator ------------------------------------------
 
-class _ConstantInputs:
-    """A controller that always commands (v, omega)."""
-
-    TELEMETRY_FIELDS = ()
-
-    def __init__(self, v, omega):
-        self.v, self.omega = v, omega
-
-    def reset(self):
-        pass
-
-    def step(self, *args):
-        return self.v, self.omega
-
-    def telemetry(self):
-        return ()
-
-
-def test_one_euler_step_by_hand():
+def test_one_euler_step_by_hand(constant_inputs):
     """
-    Kills M4: from (0, 0, 0) with v = 1 m/s, omega = 1 rad/s and dt = 0.1 s, forward
-    Euler gives (0.1, 0, 0.1); the semi-implicit step gives y = 0.1 sin 0.1 = 0.00998.
+    Kills M4: one step by hand.
+
+    From (0, 0, 0) with v = 1 m/s, omega = 1 rad/s and dt = 0.1 s, forward Euler gives
+    (0.1, 0, 0.1); the semi-implicit step gives y = 0.1 sin 0.1 = 0.00998.
     """
-    r = simulate(_ConstantInputs(1.0, 1.0), Sine(), (0.0, 0.0, 0.0), 0.1, 0.1)
+    r = simulate(constant_inputs(1.0, 1.0), Sine(), (0.0, 0.0, 0.0), 0.1, 0.1)
     assert r.final_state == pytest.approx([0.1, 0.0, 0.1], abs=1e-15)
 
 
-def test_euler_matches_the_closed_form_sum_for_constant_inputs():
+def test_euler_matches_the_closed_form_sum_for_constant_inputs(constant_inputs):
     """
-    Kills M4: with constant v, w the forward-Euler recurrence sums a geometric series,
+    Kills M4: with constant v, w the forward-Euler recurrence sums a geometric series.
 
         x_N = x0 + v dt sum_{k<N} cos(th0 + k w dt)
             = x0 + v dt sin(N w dt / 2) / sin(w dt / 2) cos(th0 + (N - 1) w dt / 2),
@@ -262,7 +250,7 @@ def test_euler_matches_the_closed_form_sum_for_constant_inputs():
     """
     v, w, dt, n = 0.5, 0.3, 0.01, 1000
     x0, y0, th0 = 1.0, 2.0, 0.2
-    r = simulate(_ConstantInputs(v, w), Sine(), (x0, y0, th0), n * dt, dt)
+    r = simulate(constant_inputs(v, w), Sine(), (x0, y0, th0), n * dt, dt)
     half = w * dt / 2
     gain = v * dt * math.sin(n * half) / math.sin(half)
     mid = th0 + (n - 1) * half
@@ -272,9 +260,10 @@ def test_euler_matches_the_closed_form_sum_for_constant_inputs():
 
 def test_closed_loop_states_follow_forward_euler_of_the_recorded_inputs():
     """
-    Kills M4 in the closed loop: every recorded step of Case 2 satisfies
-    q[k+1] = q[k] + dt (v_k cos th_k, v_k sin th_k, omega_k + varpi_k) (the inputs the
-    controller applied, the heading before the step).
+    Kills M4 in the closed loop: every recorded step of Case 2 is a forward-Euler step.
+
+    q[k+1] = q[k] + dt (v_k cos th_k, v_k sin th_k, omega_k + varpi_k), with the inputs
+    the controller applied and the heading before the step.
     """
     dt = 0.001
     r = simulate(DlsmcController(), Sine(), (1.0, 1.0, math.pi / 6), 12.0, dt,
@@ -290,9 +279,10 @@ def test_closed_loop_states_follow_forward_euler_of_the_recorded_inputs():
 
 def test_bag_starting_time_is_the_first_message_time(tmp_path):
     """
-    Kills M5 (starting_time 0 in metadata.yaml): a bag whose messages start at
-    1.7e18 ns, read back from metadata.yaml, from the rosbag2 record inside the MCAP file,
-    and by the independent ``rosbags`` reader.
+    Kills M5 (starting_time 0 in metadata.yaml): a bag whose messages start at 1.7e18 ns.
+
+    Read back from metadata.yaml, from the rosbag2 record inside the MCAP file, and by the
+    independent ``rosbags`` reader.
     """
     t0 = 1_700_000_000_000_000_000
     times = [t0, t0 + 1_000_000, t0 + 500_000_000]
@@ -324,7 +314,7 @@ def test_bag_starting_time_is_the_first_message_time(tmp_path):
 # -- M6: the stale-odometry stop -----------------------------------------------------------
 
 def _node_session():
-    """The session exactly as ControllerNode builds it from its parameter defaults."""
+    """Build the session exactly as ControllerNode does from its parameter defaults."""
     values = controller_parameter_defaults()
     session = TrackingSession(controller_params(values),
                               **controller_node._session_options(values))
@@ -332,7 +322,7 @@ def _node_session():
 
 
 def _feed_until(session, t_last, period=0.001):
-    """Valid odometry every ``period`` [s] (wall = control = stamp) up to ``t_last``."""
+    """Feed valid odometry every ``period`` [s] (wall = control = stamp) up to ``t_last``."""
     n = int(round(t_last / period))
     for k in range(n + 1):
         t = k * period
@@ -342,9 +332,10 @@ def _feed_until(session, t_last, period=0.001):
 
 def test_stale_odometry_stops_within_one_watchdog_period_of_the_timeout():
     """
-    Kills M6 in the session or in the node's options (odom_timeout effectively
-    +0.1 s): ticking every watchdog period after the last odometry, the first stopped tick
-    comes no later than odom_timeout + watchdog_period, and not before odom_timeout.
+    Kills M6 in the session or in the node's options (odom_timeout effectively +0.1 s).
+
+    Ticking every watchdog period after the last odometry, the first stopped tick comes no
+    later than odom_timeout + watchdog_period, and not before odom_timeout.
     """
     values, session = _node_session()
     timeout, period = values['odom_timeout'], values['watchdog_period']
@@ -367,9 +358,10 @@ def test_stale_odometry_stops_within_one_watchdog_period_of_the_timeout():
 
 def test_node_watchdog_stops_within_one_watchdog_period_of_the_timeout(monkeypatch):
     """
-    Kills M6 in the node's watchdog (ControllerNode._watchdog comparing with a late
-    timeout), in process: the node's own watchdog method on a stand-in node, with its
-    clock replaced, called every watchdog period after the last odometry.
+    Kills M6 in the node's watchdog (ControllerNode._watchdog comparing with a late timeout).
+
+    In process: the node's own watchdog method on a stand-in node, with its clock replaced,
+    called every watchdog period after the last odometry.
     """
     values, session = _node_session()
     timeout, period = values['odom_timeout'], values['watchdog_period']

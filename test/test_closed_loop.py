@@ -107,27 +107,9 @@ def test_theorems_hold_across_trajectories_and_starts(name, x0):
     assert np.all(np.abs(r.omega) <= 1.59 + 1e-12)
 
 
-class _Constant:
-    """Open-loop inputs, to check the plant integration on its own."""
-
-    TELEMETRY_FIELDS = ('theta_d',)
-
-    def __init__(self, v, w):
-        self.v, self.w = v, w
-
-    def reset(self):
-        pass
-
-    def step(self, *_):
-        return self.v, self.w
-
-    def telemetry(self):
-        return (0.0,)
-
-
-def test_plant_is_forward_euler_of_eq3_with_disturbance():
+def test_plant_is_forward_euler_of_eq3_with_disturbance(constant_inputs):
     dist = YawRateDisturbance((YawRatePulse(0.5, 0.25, 0.4),))
-    r = simulate(_Constant(1.0, 0.0), make_trajectory('line'), (0.0, 0.0, 0.0), 1.0,
+    r = simulate(constant_inputs(1.0, 0.0), make_trajectory('line'), (0.0, 0.0, 0.0), 1.0,
                  disturbance=dist)
     # theta gains exactly 0.4 rad/s * 0.25 s.
     assert r.final_state[2] == pytest.approx(0.1, abs=1e-9)
@@ -135,7 +117,7 @@ def test_plant_is_forward_euler_of_eq3_with_disturbance():
     expected_x = np.sum(np.cos(theta)) * 0.001
     assert r.final_state[0] == pytest.approx(expected_x, rel=1e-12)
     # Without disturbance: half a circle of radius v / omega = 1 m in pi / omega, to O(dt).
-    r = simulate(_Constant(0.5, 0.5), make_trajectory('line'), (0.0, 0.0, 0.0), 2 * math.pi)
+    r = simulate(constant_inputs(0.5, 0.5), make_trajectory('line'), (0.0, 0.0, 0.0), 2 * math.pi)
     np.testing.assert_allclose(r.final_state[:2], [0.0, 2.0], atol=2e-3)
 
 

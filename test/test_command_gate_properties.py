@@ -1,7 +1,9 @@
 """
-Property tests of the ROS-free command gate: whatever floats and arrays arrive, the gate
-never raises and never lets a non-finite or out-of-limit value through; every input is
-either accepted within the limits or rejected with a reason naming topic, field and rule.
+Property tests of the ROS-free command gate: it never raises, never lets a bad value through.
+
+Whatever floats and arrays arrive, the gate never lets a non-finite or out-of-limit value
+through; every input is either accepted within the limits or rejected with a reason naming
+topic, field and rule.
 """
 
 import array
@@ -69,7 +71,8 @@ def test_arrays_are_accepted_exactly_when_four_finite_values_within_the_bound(
 @pytest.mark.parametrize('values, needle', [
     ([], 'len(data) = 0: must be 4 (FL, FR, RL, RR)'),
     ([1.0] * 5, 'len(data) = 5: must be 4'),
-    ([0.0, math.nan, 0.0, 0.0], 'data[1] (front_right) = nan rad/s: must be finite, not NaN or inf'),
+    ([0.0, math.nan, 0.0, 0.0],
+     'data[1] (front_right) = nan rad/s: must be finite, not NaN or inf'),
     ([0.0, 0.0, -math.inf, 0.0], 'data[2] (rear_left) = -inf rad/s: must be finite'),
     ([0.0, 0.0, 0.0, 1e308], 'data[3] (rear_right) = 1e+308 rad/s: must be within +-50 rad/s '
                              '(motors.max_wheel_speed)'),

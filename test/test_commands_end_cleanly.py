@@ -1,6 +1,8 @@
 """
-Every long command: outputs checked before the work, shipped files never overwritten
-unless asked, Ctrl-C and SIGTERM end it at once with exit 130 and no traceback.
+Every long command: outputs checked before the work, shipped files kept, a quick end.
+
+Shipped files are never overwritten unless asked; Ctrl-C and SIGTERM end a command at
+once with exit 130 and no traceback.
 """
 
 from pathlib import Path

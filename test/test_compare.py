@@ -5,11 +5,12 @@ import json
 from nfmr_dlsmc.analysis import baseline_tuning
 from nfmr_dlsmc.analysis.comparison_report import Finding, paper_findings
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, CASE2, run_scenario
-from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES, load_gain_blocks
+from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.cli import compare as compare_cli
+from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.params import controller_params, load_gain_blocks, load_params_file
 from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
@@ -38,17 +39,18 @@ def test_bad_gains_name_the_parameter(name, block, parameter, text):
     assert text in str(info.value)
 
 
-def test_gains_file_errors(tmp_path):
-    with pytest.raises(ParameterError, match='cannot be read'):
-        load_gain_blocks(tmp_path / 'missing.yaml')
-    bad = tmp_path / 'bad.yaml'
-    bad.write_text('controllers:\n  pid: [\n')
-    with pytest.raises(ParameterError, match='not valid YAML'):
-        load_gain_blocks(bad)
-    unknown = tmp_path / 'unknown.yaml'
-    unknown.write_text('controllers:\n  mpc: {}\n')
-    with pytest.raises(ParameterError, match='must be one of'):
-        load_gain_blocks(unknown)
+@pytest.mark.parametrize('text, match', [
+    (None, 'cannot read'),
+    ('controllers:\n  pid: [\n', 'YAML syntax error at line 3'),
+    ('pid: {}\n', "needs a 'controllers:' mapping"),
+    ('controllers:\n  mpc: {}\n', 'must be one of'),
+], ids=['missing', 'yaml_syntax', 'no_controllers', 'unknown_controller'])
+def test_gains_file_errors(tmp_path, text, match):
+    path = tmp_path / 'gains.yaml'
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(NfmrError, match=match):
+        load_gain_blocks(path)
 
 
 def test_dlsmc_built_by_name_is_the_paper_controller():
@@ -190,8 +192,9 @@ def test_report_figures_are_pngs_and_referenced(report):
 @pytest.fixture(scope='module')
 def pybullet_report(tmp_path_factory):
     """
-    The paper's DLSMC and the robot profile on the chassis, every run cut to 20 s (the
-    hold window is then 15-20 s).
+    Run the paper's DLSMC and the robot profile on the chassis, every run cut to 20 s.
+
+    The hold window is then 15-20 s.
     """
     out = tmp_path_factory.mktemp('report_pybullet')
     assert compare_cli.main(['--plant', 'pybullet', '--duration', '20', '--controllers',
@@ -245,9 +248,7 @@ def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):
 
 
 def test_compare_rejects_a_bad_duration_in_one_line(tmp_path, capsys):
-    with pytest.raises(SystemExit) as info:
-        compare_cli.main(['--out', str(tmp_path / 'r'), '--duration', '0'])
-    assert info.value.code == 2
+    assert compare_cli.main(['--out', str(tmp_path / 'r'), '--duration', '0']) == 2
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and '--duration: must be a finite number > 0' in err
     assert not (tmp_path / 'r').exists()
@@ -256,19 +257,19 @@ def test_compare_rejects_a_bad_duration_in_one_line(tmp_path, capsys):
 def test_compare_rejects_a_bad_gains_file(tmp_path, capsys):
     bad = tmp_path / 'gains.yaml'
     bad.write_text('controllers:\n  pid: {kp: -2}\n')
-    with pytest.raises(SystemExit) as info:
-        compare_cli.main(['--out', str(tmp_path / 'r'), '--gains', str(bad)])
-    assert info.value.code == 2
-    assert 'pid.kp = -2' in capsys.readouterr().err
+    assert compare_cli.main(['--out', str(tmp_path / 'r'), '--gains', str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and err.startswith('nfmr-compare: error: pid.kp = -2')
     assert not (tmp_path / 'r').exists()
 
 
 def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
     path = tmp_path / 'comparison.yaml'
-    path.write_text(compare_cli.shipped_config('comparison.yaml').read_text())
+    path.write_text(shipped_config('comparison.yaml').read_text())
     shipped = load_gain_blocks(path)
     tuned_pid = {'v_c': 0.5, 'kp': 1.0, 'ki': 0.1, 'kd': 0.01, 'k_theta': 0.2}
-    baseline_tuning.write_gains_file(path, {'pid': (tuned_pid, 1.0, 2.0)}, 3, 0, 'nfmr-tune-baselines')
+    baseline_tuning.write_gains_file(path, {'pid': (tuned_pid, 1.0, 2.0)}, 3, 0,
+                                     'nfmr-tune-baselines')
     written = load_gain_blocks(path)
     assert written['dlsmc_robot'] == shipped['dlsmc_robot']
     assert written['pid'] == tuned_pid and written['dlsmc'] == {}

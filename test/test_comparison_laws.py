@@ -1,6 +1,7 @@
 """
-The comparison controllers against hand-computed law values, their saturation, and
-their convergence from a benign start.
+The comparison controllers against hand-computed law values.
+
+Also their saturation, and their convergence from a benign start.
 """
 
 import math
@@ -31,12 +32,13 @@ from nfmr_dlsmc.baselines.geometric_trackers import (
     StanleyController,
 )
 from nfmr_dlsmc.baselines.path_frame import robot_frame_errors
-from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES, load_gain_blocks
+from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.baselines.single_loop import CsmcController, DsmcController, PidController
 from nfmr_dlsmc.core.gains import InputLimits
 from nfmr_dlsmc.core.sliding_functions import saturated_sign
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.params import load_gain_blocks
 from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest

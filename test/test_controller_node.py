@@ -8,6 +8,7 @@ from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.controller_node import ControllerNode
+from nfmr_dlsmc.runtime.params import controller_parameters
 import numpy as np
 import pytest
 import rclpy
@@ -42,7 +43,8 @@ class Peer(Node):
         msg.header.stamp.nanosec = int(round((t - int(t)) * 1e9))
         msg.header.frame_id = 'odom'
         msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
-        msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+        orientation = msg.pose.pose.orientation
+        orientation.z, orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
         self.odom.publish(msg)
 
 
@@ -183,12 +185,15 @@ def test_structure_parameters_are_read_only_and_all_are_described(setup):
     node, peer = setup()
     result = node.set_parameters([Parameter('trajectory.name', value='circle')])[0]
     assert not result.successful
-    names = [n for n in node._parameters if n != 'use_sim_time']
-    described = node.describe_parameters(names)
-    assert all(d.description for d in described)
-    assert next(d for d in described if d.name == 'inner.eps').description.startswith(
-        'barrier half-width')
-    assert next(d for d in described if d.name == 'steering.j1').read_only
+    params = controller_parameters()
+    described = {d.name: d for d in node.describe_parameters([p.name for p in params])}
+    for p in params:
+        assert described[p.name].description == p.summary, p.name
+        assert described[p.name].additional_constraints == p.rule_text, p.name
+        assert described[p.name].read_only == p.read_only, p.name
+    assert described['inner.eps'].description == 'barrier half-width epsilon, eq. (13) [rad]'
+    assert described['inner.eps'].additional_constraints == '(0, pi)'
+    assert described['steering.j1'].read_only
 
 
 def test_twist_stamped_on_request(setup):
@@ -198,6 +203,8 @@ def test_twist_stamped_on_request(setup):
     first = peer.twists[0][1]
     assert isinstance(first, TwistStamped) and first.header.frame_id == 'base_link'
     assert first.twist.linear.x == pytest.approx(math.hypot(-0.1, -0.35))
+
+
 @pytest.mark.parametrize('name, value, message', [
     ('inner.p1', 32, 'inner.p1 = 32: must be a positive odd integer'),
     ('outer.p2', 17, 'outer.p2 = 17: must satisfy 1 < outer.p2/outer.q2 < 2'),

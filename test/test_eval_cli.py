@@ -101,8 +101,8 @@ def test_a_comparison_controller_with_its_shipped_gains(request):
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario, Scenario
-    from nfmr_dlsmc.baselines.registry import load_gain_blocks
     from nfmr_dlsmc.core.metrics import simulation_metrics
+    from nfmr_dlsmc.runtime.params import load_gain_blocks
 
     block = load_gain_blocks(request.config.rootpath / 'config' / 'comparison.yaml')['kanayama']
     scenario = Scenario('case1', CASE1_LONGITUDINAL.x0, CASE1_LONGITUDINAL.disturbance, 30.0)

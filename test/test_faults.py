@@ -27,7 +27,7 @@ REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 
 
 def gone(pid: int) -> bool:
-    """Exited: no process, or a zombie left for init to reap (its parent died first)."""
+    """Return whether it exited: no process, or a zombie left for init to reap."""
     try:
         return Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0] == 'Z'
     except OSError:
@@ -36,9 +36,11 @@ def gone(pid: int) -> bool:
 
 def each_fault_logged_once(log: str) -> bool:
     """
-    No fault reported twice in a row: each episode is logged once, and the same fault
-    again only after tracking resumed (a different fault, e.g. stale odometry followed by
-    the stamps of a restarted sim, is a new line).
+    Return whether no fault is reported twice in a row.
+
+    Each episode is logged once, and the same fault again only after tracking resumed (a
+    different fault, e.g. stale odometry followed by the stamps of a restarted sim, is a
+    new line).
     """
     events = [re.sub(r'[-+]?[0-9][0-9.]*', '#', line.split(']: ', 1)[-1])
               for line in log.splitlines()
@@ -46,13 +48,17 @@ def each_fault_logged_once(log: str) -> bool:
     return all(not (a.startswith('stopping') and a == b) for a, b in zip(events, events[1:]))
 
 
-@pytest.mark.parametrize('child, module', [('sim', 'nfmr_sim.ros.sim_node'),
-                                           ('controller', 'nfmr_dlsmc.ros.controller_node')])
-def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child, module):
+def node_pids(proc) -> dict:
+    """Return the pids of the ``sim`` and ``controller`` children of an nfmr-run process."""
+    return {name: wait_for_child(proc, module) for name, module in
+            (('sim', 'nfmr_sim.ros.sim_node'), ('controller', 'nfmr_dlsmc.ros.controller_node'))}
+
+
+@pytest.mark.parametrize('child', ['sim', 'controller'])
+def test_a_killed_child_stops_the_run_with_its_code_and_log(tmp_path, child):
     proc = start_run(tmp_path, '--duration', '60')
     try:
-        pids = {name: wait_for_child(proc, m) for name, m in
-                (('sim', 'nfmr_sim.ros.sim_node'), ('controller', 'nfmr_dlsmc.ros.controller_node'))}
+        pids = node_pids(proc)
         time.sleep(4.0)
         killed_at = time.monotonic()
         os.kill(pids[child], signal.SIGKILL)
@@ -92,13 +98,12 @@ def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
 
 def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     proc = start_run(tmp_path, '--duration', '60')
-    kids = [wait_for_child(proc, 'nfmr_sim.ros.sim_node'),
-            wait_for_child(proc, 'nfmr_dlsmc.ros.controller_node')]
+    kids = list(node_pids(proc).values())
     time.sleep(3.0)
     sent = time.monotonic()
     proc.send_signal(signal.SIGTERM)
-    stdout, _ = proc.communicate(timeout=30)
-    assert proc.returncode == 130
+    stdout, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130, stderr
     assert all(gone(pid) for pid in kids)
     assert time.monotonic() - sent < 15  # children within 5 s each, then the bag is closed
     with Reader(Path(stdout.strip().splitlines()[-1])) as reader:
@@ -107,8 +112,7 @@ def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
 
 def test_killed_recorder_leaves_a_bag_readable_up_to_its_last_chunk(tmp_path):
     proc = start_run(tmp_path, '--duration', '60')
-    kids = [wait_for_child(proc, 'nfmr_sim.ros.sim_node'),
-            wait_for_child(proc, 'nfmr_dlsmc.ros.controller_node')]
+    kids = list(node_pids(proc).values())
     time.sleep(6.0)
     proc.kill()  # SIGKILL: the recorder (in the launcher) dies without finishing the bag
     proc.wait(timeout=10)
@@ -188,8 +192,6 @@ def test_a_command_flood_does_not_slow_the_realtime_sim():
         sim_proc.wait(timeout=10)
 
 
-
-
 def _sh(*command):
     return subprocess.run(list(command), capture_output=True, text=True, timeout=30)
 
@@ -197,8 +199,9 @@ def _sh(*command):
 @pytest.fixture(params=['5ms', None], ids=['netem-5ms', 'no-delay'])
 def two_hosts(request):
     """
-    Two network namespaces (our own test hosts) joined by a veth pair, with netem delay
-    on both ends (or none); removed afterwards.
+    Make two network namespaces (our own test hosts) joined by a veth pair.
+
+    With netem delay on both ends (or none); removed afterwards.
     """
     delay = request.param
     tag = f'{os.getpid() % 100000}'
@@ -264,9 +267,11 @@ def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
 
 def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
     """
-    SIGKILL the sim mid-run: the controller process commands zero speed within its
-    odometry timeout (0.25 s in the file) plus 50 ms, logs it once and keeps running; a new
-    sim is then tracked from trajectory time 0.
+    SIGKILL the sim mid-run: the controller stops the robot, and tracks a new sim again.
+
+    The controller process commands zero speed within its odometry timeout (0.25 s in the
+    file) plus 50 ms, logs it once and keeps running; a new sim is then tracked from
+    trajectory time 0.
     """
     config = str(Path(__file__).parents[1] / 'config' / 'paper_case1.yaml')
     bin_dir = Path(sys.executable).parent

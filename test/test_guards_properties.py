@@ -1,6 +1,7 @@
 """
-Property-based tests of the ROS-free guards: whatever odometry arrives and whatever
-(v, omega) the mapping is asked for, no exception and never a non-finite command.
+Property-based tests of the ROS-free guards: no exception, never a non-finite command.
+
+Whatever odometry arrives and whatever (v, omega) the mapping is asked for.
 """
 
 import math
@@ -17,8 +18,8 @@ ANY_FLOAT = st.floats(allow_nan=True, allow_infinity=True)
 ANY_FRAME = st.sampled_from(['odom', 'map', '', 'odom '])
 
 
-ROBOT = controller_params(load_params_file(Path(__file__).parents[1] / 'config' /
-                                          'robot_case1.yaml'))
+ROBOT = controller_params(
+    load_params_file(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml'))
 
 
 @settings(max_examples=300, deadline=None)

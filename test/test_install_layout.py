@@ -19,8 +19,8 @@ def test_ament_index_finds_the_package(monkeypatch):
 
 
 def test_executables_sit_in_lib_of_the_package_and_run():
-    for name, needle in (('controller', 'controller: invalid parameter: inner.p1 = 32'),
-                         ('sim', "sim: invalid parameter: mode = 'x'")):
+    for name, needle in (('controller', 'controller: error: inner.p1 = 32'),
+                         ('sim', "sim: error: mode = 'x'")):
         exe = PREFIX / 'lib' / 'nfmr_dlsmc' / name
         assert exe.exists() and os.access(exe, os.X_OK)
         arg = 'inner.p1:=32' if name == 'controller' else 'mode:=x'

@@ -237,7 +237,8 @@ def test_total_variation_rate_and_sample_durations():
     assert math.isclose(total_variation_rate([0.0, 1.0, -1.0], 0.5), 3.0 / 1.0)
     assert math.isclose(total_variation_rate([0.0, 1.0, -1.0], [0.5, 0.25, 9.0]), 3.0 / 0.75)
     np.testing.assert_allclose(sample_durations([0.0, 0.1, 0.3, 0.4]), [0.1, 0.2, 0.1, 0.1])
-    np.testing.assert_allclose(sample_durations([0.0, 1.0, 3.0, 4.0, 4.5]), [1.0, 2.0, 1.0, 0.5, 1.0])
+    np.testing.assert_allclose(sample_durations([0.0, 1.0, 3.0, 4.0, 4.5]),
+                               [1.0, 2.0, 1.0, 0.5, 1.0])
     np.testing.assert_array_equal(sample_durations([5.0]), [0.0])
 
 
@@ -386,7 +387,8 @@ def test_bag_metadata_has_the_rosbag2_version_9_layout(tmp_path):
         writer.add_topic('/b', 'std_msgs/msg/Float64MultiArray',
                          [{'history': 'keep_all', 'depth': 0}])
         for k, t in enumerate((3_000, 1_000, 2_000)):
-            writer.write('/a', t, b'\x00\x01\x00\x00' + bytes(8), publish_time_ns=None if k else 42)
+            writer.write('/a', t, b'\x00\x01\x00\x00' + bytes(8),
+                         publish_time_ns=None if k else 42)
         writer.write('/b', 5_000, b'\x00\x01\x00\x00' + bytes(8))
     info = yaml.safe_load((directory / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert list(info) == ['version', 'storage_identifier', 'duration', 'starting_time',

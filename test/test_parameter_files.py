@@ -44,6 +44,7 @@ def test_controller_refuses_bad_parameter_files(tmp_path, name, text, needle):
     ('sim:\n  ros__parameters:\n    disturbance: {pulses: [1.0, 2.0]}\n',
      'disturbance.pulses = [1.0, 2.0]: must hold groups of 5 numbers'),
     ('sim:\n  ros__parameters:\n    initial_pose: [1.0, 4.0\n', 'YAML syntax error'),
+    ('sim:\n  ros__parameters:\n    disturbance: {pulses: []}\n', 'must not be an empty list'),
 ])
 def test_sim_refuses_bad_parameter_files(tmp_path, text, needle):
     path = tmp_path / 'params.yaml'

@@ -14,13 +14,15 @@ from nfmr_dlsmc.runtime.params import (
 import pytest
 
 PAPER_FILE = 'config/paper_case1.yaml'
+ROBOT_FILE = 'config/robot_case1.yaml'
 
 
 def test_shipped_paper_file_is_the_paper_plus_two_robot_options(request):
     flat = load_params_file(request.config.rootpath / PAPER_FILE)
     params = controller_params(flat)
     default = ControllerParams()
-    assert params.dlsmc.outer == default.dlsmc.outer and params.dlsmc.limits == default.dlsmc.limits
+    assert params.dlsmc.outer == default.dlsmc.outer
+    assert params.dlsmc.limits == default.dlsmc.limits
     assert params.dlsmc.inner == replace(default.dlsmc.inner, anti_windup=True)
     assert params.dlsmc.thetadot_filter == 0.02
     assert (params.trajectory, params.steering, params.geometry) == (
@@ -29,7 +31,7 @@ def test_shipped_paper_file_is_the_paper_plus_two_robot_options(request):
 
 def test_robot_file_is_the_paper_gains_plus_the_four_robot_options(request):
     paper = controller_params(load_params_file(request.config.rootpath / PAPER_FILE))
-    robot = controller_params(load_params_file(request.config.rootpath / 'config/robot_case1.yaml'))
+    robot = controller_params(load_params_file(request.config.rootpath / ROBOT_FILE))
     default = ControllerParams()
     assert paper.dlsmc.is_paper_law and not robot.dlsmc.is_paper_law
     assert robot.dlsmc.outer == replace(default.dlsmc.outer, linear_zone=0.02)
@@ -73,7 +75,7 @@ def test_nested_and_wildcard_sections_are_flattened(tmp_path):
     ({'trajectory.speed': 1.0}, 'trajectory.speed'),
     ({'trajectory.name': 'line', 'trajectory.line.speed': -1.0}, 'trajectory.line.speed'),
     ({'steering.j1': -1.0, 'steering.j2': 2.0}, 'steering.j1'),
-    ({'steering.j1': 0.0, 'steering.j2': 0.0}, 'j2'),
+    ({'steering.j1': 0.0, 'steering.j2': 0.0}, 'steering.j2'),
 ])
 def test_invalid_parameters_are_named(flat, name):
     with pytest.raises(ParameterError) as info:

@@ -1,6 +1,8 @@
 """
-The in-process pybullet plant: real pybullet (DIRECT), the sim's world and the nodes'
-wheel mapping; the robot profile holds the path where the paper's law limit-cycles.
+The in-process pybullet plant: real pybullet (DIRECT) and the sim's world.
+
+With the nodes' wheel mapping; the robot profile holds the path where the paper's law
+limit-cycles.
 """
 
 import json
@@ -55,49 +57,30 @@ def test_paper_law_limit_cycles_on_the_chassis_from_the_same_start():
     assert m.hold_distance_p99 > 0.01
 
 
-class ConstantInputs:
-    """A controller that commands a constant (v, omega): isolates the plant."""
-
-    TELEMETRY_FIELDS = ('theta_d', 'omega_saturated')
-    period = 0.001
-
-    def __init__(self, v, omega):
-        self.v, self.omega = v, omega
-
-    def reset(self):
-        pass
-
-    def step(self, x, y, theta, x_d, y_d, xdot_d, ydot_d, dt=None, xddot_d=0.0, yddot_d=0.0):
-        return self.v, self.omega
-
-    def telemetry(self):
-        return (0.0, 0.0)
-
-
-def test_yaw_rate_pulse_acts_on_the_actuator_side():
+def test_yaw_rate_pulse_acts_on_the_actuator_side(constant_inputs):
     # A 0.5 rad/s pulse over 0.5 s added to a straight run turns the chassis by ~0.25 rad,
     # while the recorded command stays omega = 0.
     pulse = YawRateDisturbance((YawRatePulse(1.0, 0.5, 0.5),))  # start [s], duration [s], [rad/s]
-    run = simulate_pybullet(ConstantInputs(0.5, 0.0), make_trajectory('line'), (0, 0, 0), 2.0,
+    run = simulate_pybullet(constant_inputs(0.5, 0.0), make_trajectory('line'), (0, 0, 0), 2.0,
                             disturbance=pulse)
     assert np.all(run.omega == 0.0)
     assert run.final_state[2] == pytest.approx(0.25, abs=0.02)
     assert run.state[400, 2] == pytest.approx(0.0, abs=1e-3)  # before the pulse
 
 
-def test_plant_follows_a_steady_turn_like_the_unicycle():
+def test_plant_follows_a_steady_turn_like_the_unicycle(constant_inputs):
     # v = 0.5 m/s, omega = 0.4 rad/s from rest: after 3 s P moves on a circle of 1.25 m
     # about (0, 1.25) to within the tyres' speed loss (a few percent).
-    run = simulate_pybullet(ConstantInputs(0.5, 0.4), make_trajectory('line'), (0, 0, 0), 3.0)
+    run = simulate_pybullet(constant_inputs(0.5, 0.4), make_trajectory('line'), (0, 0, 0), 3.0)
     x, y, theta = run.final_state
     assert math.hypot(x, y - 1.25) == pytest.approx(1.25, rel=0.01)
     assert theta == pytest.approx(0.4 * 3.0, rel=0.05)
     assert run.steer.shape == run.steer_joint_velocity.shape == (3000, 4)
 
 
-def test_plant_rejects_a_mapping_that_does_not_fit_the_chassis():
+def test_plant_rejects_a_mapping_that_does_not_fit_the_chassis(constant_inputs):
     with pytest.raises(ParameterError, match='must match the simulated chassis'):
-        simulate_pybullet(ConstantInputs(0.5, 0.0), make_trajectory('line'), (0, 0, 0), 0.1,
+        simulate_pybullet(constant_inputs(0.5, 0.0), make_trajectory('line'), (0, 0, 0), 0.1,
                           geometry=RobotGeometry(wheelbase=1.2))
 
 

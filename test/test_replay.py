@@ -1,6 +1,7 @@
 """
-nfmr-replay: a replayed bag, recorded again, holds the same bytes in the same order;
-every topic is republished whatever QoS the bag recorded; selecting nothing is an error;
+nfmr-replay: a replayed bag, recorded again, holds the same bytes in the same order.
+
+Every topic is republished whatever QoS the bag recorded; selecting nothing is an error;
 Ctrl-C and SIGTERM end it at once.
 """
 
@@ -177,9 +178,10 @@ def test_recorded_qos_reads_the_channel_metadata():
 @pytest.mark.parametrize('topics', [RUN_TOPICS, FOREIGN_TOPICS], ids=['nfmr_run', 'foreign'])
 def test_every_recorded_topic_is_republished(topics, tmp_path):
     """
-    Each topic reaches a subscriber asking for the reliability and durability the bag
-    recorded (a volatile offer does not match a transient-local request, nor best effort a
-    reliable one), all messages in order.
+    Each topic reaches a subscriber asking for the QoS the bag recorded, all in order.
+
+    The subscriber asks for the recorded reliability and durability (a volatile offer does
+    not match a transient-local request, nor best effort a reliable one).
     """
     written = write_qos_bag(tmp_path / 'bag', topics)
     sent = {topic: [deserialize_message(raw, message_class(topics[topic][0])) for raw in data]
@@ -215,7 +217,7 @@ def test_every_recorded_topic_is_republished(topics, tmp_path):
 
 @pytest.fixture(scope='module')
 def sparse(tmp_path_factory):
-    """A bag of /odom messages over 1 s and a /quiet channel without messages."""
+    """Write a bag of /odom messages over 1 s and a /quiet channel without messages."""
     directory = tmp_path_factory.mktemp('sparse') / 'bag'
     with BagWriter(directory) as writer:
         writer.add_topic('/odom', 'std_msgs/msg/String', [QosProfile()])

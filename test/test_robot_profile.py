@@ -1,6 +1,7 @@
 """
-The robot profile's four options against hand-computed values, and its closed loop on the
-kinematic model (the pybullet loop is in test_pybullet_plant.py).
+The robot profile's four options against hand-computed values, and its closed loop.
+
+The closed loop on the kinematic model; the pybullet loop is in test_pybullet_plant.py.
 """
 
 import math

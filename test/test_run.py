@@ -38,7 +38,7 @@ def cmdline(pid):
 
 
 def wait_for_child(proc, marker, timeout=60.0):
-    """The pid of the child of ``proc`` whose command line contains ``marker``."""
+    """Return the pid of the child of ``proc`` whose command line contains ``marker``."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         for pid in children_of(proc.pid):
@@ -118,7 +118,8 @@ def test_sigint_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     stdout, stderr = proc.communicate(timeout=30)
     assert proc.returncode == 130
     for pid in kids:
-        assert not Path(f'/proc/{pid}').exists() or 'Z' in Path(f'/proc/{pid}/stat').read_text().split()[2]
+        stat = Path(f'/proc/{pid}/stat')
+        assert not stat.parent.exists() or 'Z' in stat.read_text().split()[2]
     bag = Path(stdout.strip().splitlines()[-1])
     with Reader(bag) as reader:
         assert reader.message_count > 0

@@ -7,8 +7,8 @@ import time
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_sim.ros.sim_node import LIVE_PARAMETERS, SimNode
-from nfmr_sim.sim_params import sim_parameter_defaults
+from nfmr_sim.ros.sim_node import SimNode
+from nfmr_sim.sim_params import sim_parameters
 import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
@@ -38,8 +38,10 @@ class Driver(Node):
         self.create_subscription(Clock, '/clock', self.clock.append, QOS)
         self.create_subscription(JointState, 'joint_states', self.joints.append, QOS)
         self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
-        self.steer = self.create_publisher(Float64MultiArray, 'steer_position_controller/commands', QOS)
-        self.wheels = self.create_publisher(Float64MultiArray, 'wheel_velocity_controller/commands', QOS)
+        self.steer = self.create_publisher(Float64MultiArray,
+                                           'steer_position_controller/commands', QOS)
+        self.wheels = self.create_publisher(Float64MultiArray,
+                                            'wheel_velocity_controller/commands', QOS)
         self.twist = self.create_publisher(Twist, 'cmd_vel', QOS)
 
     def _on_odom(self, msg):
@@ -154,9 +156,10 @@ def test_cmd_vel_goes_through_the_steering_geometry(ros_context):
 
 @pytest.mark.parametrize('steer, wheels, reason', [
     ([0.0] * 4, [7.0] * 3, 'wheel_velocity_controller/commands: len(data) = 3: must be 4'),
-    ([0.0] * 4, [math.nan] * 4, 'data[0] (front_left) = nan rad/s: must be finite, not NaN or inf'),
-    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4, 'steer_position_controller/commands: data[0] '
-                                          '(front_left) = inf rad: must be finite'),
+    ([0.0] * 4, [math.nan] * 4,
+     'data[0] (front_left) = nan rad/s: must be finite, not NaN or inf'),
+    ([math.inf, 0.0, 0.0, 0.0], [7.0] * 4,
+     'steer_position_controller/commands: data[0] (front_left) = inf rad: must be finite'),
     ([0.0] * 4, [1e308] * 4, 'data[0] (front_left) = 1e+308 rad/s: must be within +-50 rad/s '
                              '(motors.max_wheel_speed)'),
 ])
@@ -243,7 +246,7 @@ def test_valid_live_changes_apply_at_the_next_step(ros_context):
         for name, value in (('disturbance.odom_position_noise', 0.01),
                             ('command_timeout', 0.25), ('motors.max_wheel_speed', 5.0)):
             assert _set(client, name, value).successful
-        wait_for(lambda: sim.settings.max_wheel_speed == 5.0)
+        wait_for(lambda: sim.settings.world.motors.max_wheel_speed == 5.0)
         assert sim.gate.timeout == 0.25 and sim.gate.max_wheel_speed == 5.0
         assert sim.world.config.disturbance.odom_position_noise == 0.01
         n = len(driver.odom)
@@ -262,14 +265,18 @@ def test_every_sim_parameter_is_described_over_dds(ros_context):
     try:
         client = AsyncParameterClient(driver, 'sim')
         assert client.wait_for_services(timeout_sec=10.0)
-        names = list(sim_parameter_defaults())
-        future = client.describe_parameters(names)
+        params = {p.name: p for p in sim_parameters()}
+        future = client.describe_parameters(list(params))
         wait_for(future.done)
         descriptors = {d.name: d for d in future.result().descriptors}
-        assert set(descriptors) == set(names)
+        assert set(descriptors) == set(params)
         for name, descriptor in descriptors.items():
-            assert len(descriptor.description) > 10, name
-            assert descriptor.read_only == (name not in LIVE_PARAMETERS), name
+            assert descriptor.description == params[name].summary, name
+            assert descriptor.additional_constraints == params[name].rule_text, name
+            assert descriptor.read_only == params[name].read_only, name
+        assert descriptors['motors.max_wheel_speed'].description.endswith('[rad/s]')
+        assert not descriptors['disturbance.pulses'].read_only
+        assert descriptors['chassis.steer_limit'].read_only
     finally:
         stop(sim, driver, executor)
 
@@ -293,6 +300,21 @@ def test_invalid_parameters_stop_the_node(ros_context):
         SimNode(context=ros_context, parameter_overrides=[Parameter('mode', value='fast')])
     with pytest.raises(ParameterError, match='unknown parameter'):
         SimNode(context=ros_context, parameter_overrides=[Parameter('motor.rated', value=1.0)])
+    with pytest.raises(ParameterError, match='physics_dt = True: must be of type double'):
+        SimNode(context=ros_context, parameter_overrides=[Parameter('physics_dt', value=True)])
+
+
+def test_integer_and_empty_arrays_are_taken_for_arrays_of_floats(ros_context):
+    sim = SimNode(context=ros_context, parameter_overrides=[
+        Parameter('initial_pose', value=[1, 4, 0]), Parameter('disturbance.pulses', value=[]),
+        Parameter('motors.rated_torque', value=20)])
+    try:
+        assert sim.settings.initial_pose == (1.0, 4.0, 0.0)
+        assert sim.settings.world.disturbance.pulses == ()
+        assert sim.get_parameter('initial_pose').type_ == Parameter.Type.DOUBLE_ARRAY
+        assert sim.get_parameter('motors.rated_torque').value == 20.0
+    finally:
+        sim.destroy_node()
 
 
 def _lockstep_run(steps):

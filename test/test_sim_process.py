@@ -18,7 +18,8 @@ SIM = str(Path(sys.executable).parent / 'sim')
 
 def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
     config = request.config.rootpath / 'config' / 'paper_case1.yaml'
-    proc = subprocess.Popen([SIM, '--ros-args', '--params-file', str(config), '-p', 'mode:=realtime'],
+    proc = subprocess.Popen([SIM, '--ros-args', '--params-file', str(config), '-p',
+                             'mode:=realtime'],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     context = rclpy.Context()
     rclpy.init(context=context)

@@ -76,7 +76,8 @@ def test_crab_mode_translates_without_yaw():
         out = run(world, 0.6, 0.0, mode, 4.0, crab_angle=0.4)
         assert max(abs(o.centre.yaw_rate) for o in out[-2000:]) < 1e-3
         assert abs(out[-1].centre.yaw) < 5e-3
-        heading = math.atan2(mean_of(out, lambda o: o.centre.vy), mean_of(out, lambda o: o.centre.vx))
+        heading = math.atan2(mean_of(out, lambda o: o.centre.vy),
+                             mean_of(out, lambda o: o.centre.vx))
         assert heading == pytest.approx(0.4, abs=0.02)
 
 

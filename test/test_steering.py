@@ -97,8 +97,8 @@ def test_eq2_agrees_with_rigid_body_geometry(mode):
 
 
 @pytest.mark.parametrize('kwargs, name', [
-    ({'j1': 1.5, 'j2': -0.5}, 'j1'), ({'j1': 1.0, 'j2': 1.0}, 'j2'),
-    ({'j1': math.nan, 'j2': 0.0}, 'j1')])
+    ({'j1': 1.5, 'j2': -0.5}, 'steering.j1'), ({'j1': 1.0, 'j2': 1.0}, 'steering.j2'),
+    ({'j1': math.nan, 'j2': 0.0}, 'steering.j1')])
 def test_invalid_steer_modes(kwargs, name):
     with pytest.raises(ParameterError) as info:
         SteerMode(**kwargs)

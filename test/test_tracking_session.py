@@ -26,16 +26,16 @@ def test_nothing_is_commanded_before_the_first_valid_odometry():
 
 
 @pytest.mark.parametrize('bad, reason', [
-    (dict(x=math.nan), 'not finite'), (dict(x=math.inf), 'not finite'),
-    (dict(frame='map'), "in frame 'map', expected 'odom'"),
-    (dict(x=13.0), 'jumped 12.00 m in one message (limit 10 m)'),
+    ({'x': math.nan}, 'not finite'), ({'x': math.inf}, 'not finite'),
+    ({'frame': 'map'}, "in frame 'map', expected 'odom'"),
+    ({'x': 13.0}, 'jumped 12.00 m in one message (limit 10 m)'),
 ])
 def test_invalid_odometry_stops_once_and_valid_odometry_resumes(bad, reason):
     s = session()
     for k in range(5):
         _, out = feed(s, 1.0, 4.0, k * 0.001)
         assert not out.stopped and out.v > 0.0
-    args = dict(x=1.0, y=4.0, stamp=0.005, frame='odom') | bad
+    args = {'x': 1.0, 'y': 4.0, 'stamp': 0.005, 'frame': 'odom'} | bad
     accepted, out = feed(s, args['x'], args['y'], args['stamp'], args['frame'])
     assert accepted and out.stopped and out.v == 0.0 and out.omega == 0.0
     assert reason in out.report

@@ -64,4 +64,3 @@ def test_unknown_name_and_parameter_rejected():
         make_trajectory('sine', radius=2.0)
     with pytest.raises(ParameterError, match=r'trajectory\.speed = -1 m/s: must be > 0'):
         make_trajectory('circle', speed=-1)
-

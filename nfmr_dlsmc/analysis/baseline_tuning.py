@@ -1,5 +1,5 @@
 """
-``nfmr-tune-baselines``: the documented, reproducible tuning of the comparison controllers.
+The documented, reproducible tuning of the comparison controllers (``nfmr-tune-baselines``).
 
 Every controller gets the same budget: ``--budget`` gain sets, the first its default
 gains (:mod:`nfmr_dlsmc.baselines.gains`), the others drawn log-uniformly from the ranges
@@ -16,12 +16,8 @@ The DLSMC is not tuned: it runs the paper's published gains. The result is writt
 ``config/comparison.yaml`` with the search recorded beside the gains.
 """
 
-import argparse
 import math
-import os
 from pathlib import Path
-import sys
-import time
 
 from nfmr_dlsmc.analysis.comparison_scenarios import (
     CASE1_LATERAL,
@@ -29,10 +25,9 @@ from nfmr_dlsmc.analysis.comparison_scenarios import (
     CASE2,
     run_scenario,
 )
-from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES, load_gain_blocks
-from nfmr_dlsmc.cli.common import check_not_shipped, check_writable, OneLineParser, run_command
+from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.core.metrics import error_criteria
-from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.params import load_gain_blocks
 from nfmr_dlsmc.runtime.worker_pool import worker_pool
 import numpy as np
 import yaml
@@ -71,14 +66,14 @@ TUNED = tuple(name for name in CONTROLLER_NAMES if name in SEARCH_SPACES)
 
 
 def objective_name(name: str) -> str:
-    """What controller ``name`` is scored on."""
+    """Return what controller ``name`` is scored on."""
     if name in INNER_LOOP_METHODS:
         return 'IAE of theta - theta_d, Case 2 [rad*s]'
     return 'IAE of the distance error, Case 1 (1,4,0) + (4,1,0) [m*s]'
 
 
 def score(name: str, block: dict) -> float:
-    """The tuning score of one gain block (lower is better; inf if not finite)."""
+    """Return the tuning score of one gain block (lower is better; inf if not finite)."""
     if name in INNER_LOOP_METHODS:
         result = run_scenario(name, block, CASE2)
         total = error_criteria(result.telemetry['theta_e'], result.dt).iae
@@ -91,7 +86,7 @@ def score(name: str, block: dict) -> float:
 
 
 def candidates(name: str, budget: int, seed: int) -> list[dict]:
-    """``budget`` gain blocks: the defaults (empty block) first, then random draws."""
+    """Return ``budget`` gain blocks: the defaults (empty block) first, then random draws."""
     rng = np.random.default_rng([seed, CONTROLLER_NAMES.index(name)])
     blocks = [{}]
     space = SEARCH_SPACES[name]
@@ -111,8 +106,10 @@ def _score_task(task):
 
 def tune(names, budget: int, seed: int, jobs: int, progress=None) -> dict:
     """
-    Score every candidate of every controller; return name -> (best block, best score,
-    default score).
+    Score every candidate of every controller.
+
+    Returns name -> (best block, best score, default score); ``progress(done, total)``
+    follows each scored run.
     """
     tasks = [(name, i, block) for name in names
              for i, block in enumerate(candidates(name, budget, seed))]
@@ -133,7 +130,7 @@ def tune(names, budget: int, seed: int, jobs: int, progress=None) -> dict:
 
 def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: str) -> None:
     """
-    ``config/comparison.yaml``: the DLSMC's paper gains, each tuned block and its record.
+    Write ``config/comparison.yaml``: the DLSMC's paper gains, each tuned block, its record.
 
     Blocks of controllers that are not tuned (``dlsmc_robot``, the robot profile) are kept
     as the file at ``path`` had them.
@@ -156,7 +153,8 @@ def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: st
         '# Gains of every comparison controller (nfmr-compare), one block per controller.\n'
         "# dlsmc: the paper's gains (section 4.1, the defaults), not tuned.\n"
         f'# The others: random search, {budget} gain sets each (defaults first), seed {seed},\n'
-        "# ranges in nfmr_dlsmc/analysis/baseline_tuning.py; objective per controller under 'tuning'.\n"
+        '# ranges in nfmr_dlsmc/analysis/baseline_tuning.py; objective per controller under '
+        "'tuning'.\n"
         f'# Reproduce: {command}\n'
         + (f"# Not tuned, kept from the previous file: {', '.join(kept)} (dlsmc_robot: the robot\n"
            '# profile, the same values as config/robot_case1.yaml, which explains them).\n'
@@ -165,55 +163,3 @@ def write_gains_file(path: Path, best: dict, budget: int, seed: int, command: st
                 'tuning': {'budget': budget, 'seed': seed, 'method': 'random search',
                            'results': record}}
     path.write_text(header + yaml.safe_dump(document, sort_keys=False))
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(prog='nfmr-tune-baselines',
-                                     description=__doc__.split('\n')[0].split(': ', 1)[1])
-    parser.add_argument('--budget', type=int, default=60, help='gain sets per controller')
-    parser.add_argument('--seed', type=int, default=0)
-    parser.add_argument('--controllers', nargs='+', choices=TUNED, default=list(TUNED))
-    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1)
-    parser.add_argument('--out', type=Path, default=Path('comparison.yaml'),
-                        help='gains file to write (default comparison.yaml here; the shipped '
-                             'config/comparison.yaml only with --force)')
-    parser.add_argument('--force', action='store_true',
-                        help='allow --out to replace a gains file shipped with nfmr')
-    return parser
-
-
-def main(argv=None) -> int:
-    """Entry point of ``nfmr-tune-baselines``."""
-    return run_command('nfmr-tune-baselines', _run, argv)
-
-
-def _run(argv) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.budget < 1 or args.jobs < 1:
-        parser.error('--budget and --jobs must be >= 1')
-    check_not_shipped(parser, args.out, '--out', args.force)
-    check_writable(parser, args.out, '--out')
-    begin = time.perf_counter()
-
-    def progress(done, total):
-        print(f'\r{done}/{total} runs scored, {time.perf_counter() - begin:.0f} s',
-              end='', file=sys.stderr, flush=True)
-
-    try:
-        best = tune(args.controllers, args.budget, args.seed, args.jobs, progress)
-    except ParameterError as exc:
-        parser.error(str(exc))
-    print(file=sys.stderr)
-    for name, (block, value, default_value) in best.items():
-        print(f'{name:15s} {objective_name(name)}: {value:.4f} (defaults {default_value:.4f})')
-    command = (f'nfmr-tune-baselines --budget {args.budget} --seed {args.seed}'
-               + ('' if list(args.controllers) == list(TUNED)
-                  else ' --controllers ' + ' '.join(args.controllers)))
-    write_gains_file(args.out, best, args.budget, args.seed, command)
-    print(f'wrote {args.out} in {time.perf_counter() - begin:.0f} s')
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

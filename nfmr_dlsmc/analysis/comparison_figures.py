@@ -1,19 +1,19 @@
 """
-The figures of the comparison report (paper Figs 7-17) as PNG files, one colour per
-controller across all of them.
+The figures of the comparison report (paper Figs 7-17) as PNG files.
+
+One colour per controller across all of them.
 """
 
 import math
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use('Agg')
-import matplotlib.pyplot as plt  # noqa: E402
-from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2  # noqa: E402
-from nfmr_dlsmc.baselines.registry import CONTROLLER_LABELS  # noqa: E402
-from nfmr_dlsmc.core.angles import wrap_angles  # noqa: E402
-from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits  # noqa: E402
+import matplotlib.pyplot as plt
+from nfmr_dlsmc.analysis.comparison_report import ATTITUDE_COLUMNS, TABLE2_COLUMNS
+from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2
+from nfmr_dlsmc.baselines.registry import controller_label
+from nfmr_dlsmc.core.angles import wrap_angles
+from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
 
 #: One colour per controller, the same in every figure.
 COLORS = {
@@ -22,17 +22,14 @@ COLORS = {
     'btintsmc_crsmc': '#17becf', 'btintsmc_ntsmc': '#bcbd22', 'pure_pursuit': '#e377c2',
     'stanley': '#393b79', 'kanayama': '#637939', 'dlsmc_robot': '#ff00ff',
 }
-#: The paper's Case 1 methods (Figs 8-12 leave out DSMC, which fails to reach the path),
-#: each group with the DLSMC's robot profile beside the paper's DLSMC.
-PAPER_CASE1 = ('pid', 'csmc', 'dl_crsmc', 'dntsmc', 'btsmc_ntsmc', 'dlsmc', 'dlsmc_robot')
-DOUBLE_LOOP = ('dl_crsmc', 'dntsmc', 'btsmc_ntsmc', 'dlsmc', 'dlsmc_robot')
-INNER_LOOP = ('btintsmc_crsmc', 'btintsmc_ntsmc', 'dlsmc', 'dlsmc_robot')
+#: The controllers of each group of figures, each group with the DLSMC's robot profile
+#: beside the paper's DLSMC: the Case 1 figures show Table 2's methods (Figs 8-12 leave
+#: out DSMC, which fails to reach the path), Figs 10 and 12 the double-loop ones, the
+#: Case 2 figures the attitude loops of Tables 3 and 4.
+CASE1_FIGURE_METHODS = TABLE2_COLUMNS + ('dlsmc_robot',)
+DOUBLE_LOOP_METHODS = ('dl_crsmc', 'dntsmc', 'btsmc_ntsmc', 'dlsmc', 'dlsmc_robot')
 #: Time span of the Case 1 time plots [s].
 CASE1_SPAN = 30.0
-
-
-def _label(name: str) -> str:
-    return CONTROLLER_LABELS.get(name, name)
 
 
 def _runs(series: dict, scenario, names) -> dict:
@@ -40,10 +37,8 @@ def _runs(series: dict, scenario, names) -> dict:
             if (scenario.case, scenario.start_key, n) in series}
 
 
-def _time_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim=None) -> None:
-    for name, s in runs.items():
-        keep = s['t'] <= span
-        ax.plot(s['t'][keep], s[key][keep], color=COLORS.get(name), lw=1.2, label=_label(name))
+def _time_axes(ax, span: float, ylabel: str, ylim) -> None:
+    """Label the axes of a time plot and show t in [0, ``span``] [s] and ``ylim`` if given."""
     ax.set_xlabel('t [s]')
     ax.set_ylabel(ylabel)
     ax.set_xlim(0.0, span)
@@ -52,23 +47,27 @@ def _time_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim=None) ->
     ax.grid(alpha=0.3)
 
 
+def _time_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim=None) -> None:
+    for name, s in runs.items():
+        keep = s['t'] <= span
+        ax.plot(s['t'][keep], s[key][keep], color=COLORS.get(name), lw=1.2,
+                label=controller_label(name))
+    _time_axes(ax, span, ylabel, ylim)
+
+
 def _envelope_plot(ax, runs: dict, key: str, span: float, ylabel: str, ylim) -> None:
     for name, s in runs.items():
         keep = s['t'] <= span  # one envelope sample per plotted time
         ax.fill_between(s['t'][keep], s[key + '_min'][keep], s[key + '_max'][keep],
-                        color=COLORS.get(name), alpha=0.6, lw=0.8, label=_label(name))
-    ax.set_xlabel('t [s]')
-    ax.set_ylabel(ylabel)
-    ax.set_xlim(0.0, span)
-    ax.set_ylim(*ylim)
-    ax.grid(alpha=0.3)
+                        color=COLORS.get(name), alpha=0.6, lw=0.8, label=controller_label(name))
+    _time_axes(ax, span, ylabel, ylim)
 
 
 def _paths(ax, runs: dict, title: str, xlim, ylim) -> None:
     reference = next(iter(runs.values()))
     ax.plot(reference['x_d'], reference['y_d'], 'k--', lw=1.0, label='reference')
     for name, s in runs.items():
-        ax.plot(s['x'], s['y'], color=COLORS.get(name), lw=1.2, label=_label(name))
+        ax.plot(s['x'], s['y'], color=COLORS.get(name), lw=1.2, label=controller_label(name))
         ax.plot(s['x'][0], s['y'][0], 'o', color=COLORS.get(name), ms=4)
     ax.set_xlim(*xlim)
     if ylim is None:  # the paths' own extent within xlim
@@ -85,7 +84,7 @@ def _paths(ax, runs: dict, title: str, xlim, ylim) -> None:
 
 
 def _heading_figure(runs: dict, span: float, theta_lim, error_lim):
-    """(a) heading theta against theta_r, (b) theta - theta_r, both wrapped [rad]."""
+    """Plot (a) heading theta against theta_r, (b) theta - theta_r, both wrapped [rad]."""
     fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     runs = {n: dict(s, heading_error=wrap_angles(s['theta'] - s['theta_r']),
                     theta_wrapped=wrap_angles(s['theta'])) for n, s in runs.items()}
@@ -112,16 +111,18 @@ def _save(fig, path: Path) -> Path:
 
 def write_figures(out: Path, series: dict, names, plant: str = 'kinematic') -> dict:
     """
-    Write every figure into ``out``; return figure id -> (file name, caption), each
-    caption naming the plant unless it is the paper's kinematic model.
+    Write every figure into ``out``; return figure id -> (file name, caption).
+
+    Each caption names the plant unless it is the paper's kinematic model.
     """
+    matplotlib.use('Agg')
     names = list(names)
     omega_max = InputLimits().omega_max
     eps = InnerLoopGains().eps
     figures = {}
     case1 = _runs(series, CASE1_LONGITUDINAL, names)
-    case1_paper = {n: s for n, s in case1.items() if n in PAPER_CASE1}
-    case2_inner = _runs(series, CASE2, [n for n in INNER_LOOP if n in names])
+    case1_paper = {n: s for n, s in case1.items() if n in CASE1_FIGURE_METHODS}
+    case2_inner = _runs(series, CASE2, [n for n in ATTITUDE_COLUMNS if n in names])
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 8))
     _paths(axes[0], _runs(series, CASE1_LATERAL, names), '(a) x0 = (4, 1, 0)', (-1, 25), (-3, 5))
@@ -147,8 +148,8 @@ def write_figures(out: Path, series: dict, names, plant: str = 'kinematic') -> d
                         'direction theta_r, (b) error theta - theta_r.')
 
     fig, ax = plt.subplots(figsize=(9, 4))
-    _time_plot(ax, {n: s for n, s in case1.items() if n in DOUBLE_LOOP}, 'theta_d', CASE1_SPAN,
-               'theta_d [rad]', (-math.pi, math.pi))
+    _time_plot(ax, {n: s for n, s in case1.items() if n in DOUBLE_LOOP_METHODS}, 'theta_d',
+               CASE1_SPAN, 'theta_d [rad]', (-math.pi, math.pi))
     ax.legend(fontsize=8)
     figures['fig10'] = (_save(fig, out / 'fig10_theta_d.png').name,
                         "Fig. 10: desired heading theta_d of each double-loop method's "
@@ -168,7 +169,7 @@ def write_figures(out: Path, series: dict, names, plant: str = 'kinematic') -> d
                         'of every 10 ms; dotted: +-1.59 rad/s; view clipped at +-6 rad/s).')
 
     fig, ax = plt.subplots(figsize=(9, 4))
-    _time_plot(ax, {n: s for n, s in case1.items() if n in ('csmc',) + DOUBLE_LOOP}, 's_y',
+    _time_plot(ax, {n: s for n, s in case1.items() if n in ('csmc',) + DOUBLE_LOOP_METHODS}, 's_y',
                CASE1_SPAN, 's_y [m] (CSMC: s2 [m/s])', (-3, 3))
     ax.legend(fontsize=8)
     figures['fig12'] = (_save(fig, out / 'fig12_s_y.png').name,

@@ -1,14 +1,15 @@
 """
-The numbers of the comparison report (Tables 2-4, section 4.2) from one simulated run,
-and the paper's published values beside which they are printed.
-"""
+The numbers of the comparison report (Tables 2-4, section 4.2) from one simulated run.
 
-import math
+And the paper's published values beside which they are printed.
+"""
 
 from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.metrics import (
     convergence_time,
+    CONVERGENCE_TOLERANCE,
     error_criteria,
+    finite_or_none,
     simulation_metrics,
     total_variation_rate,
 )
@@ -55,20 +56,18 @@ PAPER_TABLE4 = {'btintsmc_crsmc': {'iae': 2.5522, 'ise': 0.5341, 'std': 0.0721},
 
 
 def _last_above(t, signal, tolerance) -> float | None:
+    """Return the last time [s] abs(signal) exceeds ``tolerance``; None if it is not finite."""
     signal = np.asarray(signal, dtype=float)
     if not np.all(np.isfinite(signal)):
         return None
     return convergence_time(t, np.abs(signal), tolerance)
 
 
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
-
-
-def attitude_band(t: np.ndarray, theta_e: np.ndarray, pulse_starts=()) -> float | None:
+def _attitude_band(t: np.ndarray, theta_e: np.ndarray, pulse_starts=()) -> float | None:
     """
-    Max |theta_e| [rad] over :data:`BAND_WINDOW`, leaving out
-    [start, start + PULSE_RECOVERY) after each pulse start [s]; None without theta_d.
+    Return max |theta_e| [rad] over :data:`BAND_WINDOW`; None without theta_d.
+
+    The span [start, start + PULSE_RECOVERY) after each pulse start [s] is left out.
     """
     mask = (t >= BAND_WINDOW[0]) & (t < BAND_WINDOW[1])
     for start in pulse_starts:
@@ -81,20 +80,20 @@ def attitude_band(t: np.ndarray, theta_e: np.ndarray, pulse_starts=()) -> float 
 
 def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     """
-    Every number the report prints for one run
-    (:class:`~nfmr_dlsmc.plants.kinematic.SimResult`), JSON-ready (None where undefined).
+    Return every number the report prints for one run, JSON-ready (None where undefined).
 
-    Keys: ``iae``, ``ise``, ``std`` of the distance [m*s, m^2*s, m]; ``t_conv`` (last
-    time the distance exceeds 1 mm) [s]; ``theta_r_t_conv`` (last |theta - theta_r| >
-    HEADING_TOLERANCE) [s]; ``s_y_t_conv`` (last |s_y| > SURFACE_TOLERANCE) [s];
-    ``theta_e_iae/ise/std`` of theta - theta_d and ``theta_r_iae/ise/std`` of
-    theta - theta_r, and the same from BAND_WINDOW[0] on (``theta_e_settled_*``,
-    ``theta_r_settled_*``: the attitude once the return is over); ``theta_e_band`` (:func:`attitude_band`) [rad]; ``final_distance``
-    [m]; ``final_abs_s_y`` (abs(s_y) at the last step, NaN -> None) [m]; ``max_v``
-    [m/s], ``max_abs_omega`` [rad/s] applied; ``max_abs_omega_raw``
-    [rad/s] and ``omega_raw_over_limit`` (share of steps with |omega_raw| > omega_max)
-    before saturation; ``omega_raw_tv`` (total variation per second of omega_raw over
-    the second half of the run) [rad/s^2]; and the :data:`HOLD_KEYS` of
+    The run is a :class:`~nfmr_dlsmc.plants.kinematic.SimResult`. Keys: ``iae``, ``ise``,
+    ``std`` of the distance [m*s, m^2*s, m]; ``t_conv`` (last time the distance exceeds
+    1 mm) [s]; ``theta_r_t_conv`` (last |theta - theta_r| > HEADING_TOLERANCE) [s];
+    ``s_y_t_conv`` (last |s_y| > SURFACE_TOLERANCE) [s]; ``theta_e_iae/ise/std`` of
+    theta - theta_d and ``theta_r_iae/ise/std`` of theta - theta_r, and the same from
+    BAND_WINDOW[0] on (``theta_e_settled_*``, ``theta_r_settled_*``: the attitude once the
+    return is over); ``theta_e_band`` (:func:`_attitude_band`) [rad]; ``final_distance`` [m];
+    ``final_abs_s_y`` (abs(s_y) at the last step, NaN -> None) [m]; ``max_v`` [m/s],
+    ``max_abs_omega`` [rad/s] applied; ``max_abs_omega_raw`` [rad/s] and
+    ``omega_raw_over_limit`` (share of steps with |omega_raw| > omega_max) before
+    saturation; ``omega_raw_tv`` (total variation per second of omega_raw over the second
+    half of the run) [rad/s^2]; and the :data:`HOLD_KEYS` of
     :func:`~nfmr_dlsmc.core.metrics.simulation_metrics` (``t_conv_1cm`` and the figures of
     holding the path from 15 s on, steer figures where the result has steer angles).
     """
@@ -109,19 +108,19 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     omega_raw = telemetry['omega_raw']
     metrics = {
         'iae': dist.iae, 'ise': dist.ise, 'std': dist.std,
-        't_conv': _last_above(t, distance, 1e-3),
+        't_conv': _last_above(t, distance, CONVERGENCE_TOLERANCE),
         'theta_r_t_conv': _last_above(t, heading_error, HEADING_TOLERANCE),
         's_y_t_conv': _last_above(t, telemetry['s_y'], SURFACE_TOLERANCE),
         'theta_r_iae': head.iae, 'theta_r_ise': head.ise, 'theta_r_std': head.std,
         'theta_e_iae': None, 'theta_e_ise': None, 'theta_e_std': None,
-        'theta_e_band': attitude_band(t, theta_e, pulse_starts),
-        'final_distance': _finite_or_none(distance[-1]),
-        'final_abs_s_y': _finite_or_none(abs(telemetry['s_y'][-1])),
-        'max_v': _finite_or_none(np.max(np.abs(result.v))),
-        'max_abs_omega': _finite_or_none(np.max(np.abs(result.omega))),
-        'max_abs_omega_raw': _finite_or_none(np.max(np.abs(omega_raw))),
+        'theta_e_band': _attitude_band(t, theta_e, pulse_starts),
+        'final_distance': finite_or_none(distance[-1]),
+        'final_abs_s_y': finite_or_none(abs(telemetry['s_y'][-1])),
+        'max_v': finite_or_none(np.max(np.abs(result.v))),
+        'max_abs_omega': finite_or_none(np.max(np.abs(result.omega))),
+        'max_abs_omega_raw': finite_or_none(np.max(np.abs(omega_raw))),
         'omega_raw_over_limit': float(np.mean(np.abs(omega_raw) > omega_max)),
-        'omega_raw_tv': _finite_or_none(total_variation_rate(omega_raw[len(t) // 2:], dt)),
+        'omega_raw_tv': finite_or_none(total_variation_rate(omega_raw[len(t) // 2:], dt)),
     }
     settled = t >= BAND_WINDOW[0]
     late = error_criteria(heading_error[settled], dt)
@@ -140,5 +139,5 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     metrics.update({key: tracking[key] for key in HOLD_KEYS})
     for key in ('iae', 'ise', 'std', 'theta_r_iae', 'theta_r_ise', 'theta_r_std',
                 'theta_r_settled_iae', 'theta_r_settled_ise', 'theta_r_settled_std'):
-        metrics[key] = _finite_or_none(metrics[key])
+        metrics[key] = finite_or_none(metrics[key])
     return metrics

@@ -1,7 +1,9 @@
 """
-``report.md`` of ``nfmr-compare``: the paper's Tables 2-4 beside ours, the convergence
-times of section 4.2, the figures of holding the path, the paper's qualitative findings
-checked, on pybullet which laws hold up on the chassis, and the figures.
+``report.md`` of ``nfmr-compare``: the paper's Tables 2-4 beside ours, and what they show.
+
+Also the convergence times of section 4.2, the figures of holding the path, the paper's
+qualitative findings checked, on pybullet which laws hold up on the chassis, and the
+figures.
 """
 
 from dataclasses import dataclass
@@ -16,7 +18,7 @@ from nfmr_dlsmc.analysis.comparison_metrics import (
     PULSE_RECOVERY,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2
-from nfmr_dlsmc.baselines.registry import CONTROLLER_LABELS, CONTROLLER_NAMES
+from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES
 from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, format_metric
 from nfmr_dlsmc.plants.registry import robot_plant
@@ -56,22 +58,28 @@ def _pct(ours, paper) -> str:
     return f' ({100.0 * (ours - paper) / paper:+.1f}%)'
 
 
-def _label(name: str) -> str:
-    return CONTROLLER_LABELS.get(name, name)
+def _runs_of(document: dict, scenario) -> dict:
+    """Return the runs of one scenario in ``results.json``: controller -> figures."""
+    return document.get(scenario.case, {}).get(scenario.start_key, {})
 
 
-def criteria_table(runs: dict, columns, paper: dict, prefix: str = '',
-                   plant: str = 'kinematic') -> list[str]:
+def _table_head(title: str, headers: list) -> list[str]:
+    """Return the header lines of a table: a column of row names, then ``headers``."""
+    return [f'| {title} | ' + ' | '.join(headers) + ' |', '|---|' + '---:|' * len(headers)]
+
+
+def _criteria_table(runs: dict, columns, paper: dict, prefix: str = '',
+                    plant: str = 'kinematic') -> list[str]:
     """
-    Rows IAE / ISE / STD (ours, then the paper's where published), one column per method;
-    the paper's values are kinematic-model values, so off the kinematic plant they are
+    Return rows IAE / ISE / STD (ours, then the paper's where published), a column a method.
+
+    The paper's values are kinematic-model values, so off the kinematic plant they are
     labelled so and not compared in percent.
     """
     present = [c for c in columns if c in runs]
     same_plant = plant == 'kinematic'
     source = 'paper' if same_plant else 'paper, kinematic model'
-    lines = ['| criterion | ' + ' | '.join(_label(c) for c in present) + ' |',
-             '|---|' + '---:|' * len(present)]
+    lines = _table_head('criterion', [controller_label(c) for c in present])
     for key, label in (('iae', 'IAE'), ('ise', 'ISE'), ('std', 'STD')):
         values = [runs[c].get(prefix + key) for c in present]
         lines.append(f'| {label} (nfmr) | ' + ' | '.join(_num(v) for v in values) + ' |')
@@ -85,15 +93,15 @@ def criteria_table(runs: dict, columns, paper: dict, prefix: str = '',
     return lines
 
 
-def convergence_table(runs: dict, columns, plant: str = 'kinematic') -> list[str]:
+def _convergence_table(runs: dict, columns, plant: str = 'kinematic') -> list[str]:
     """
-    Convergence times of section 4.2 with the paper's where published (kinematic-model
-    values: labelled so off the kinematic plant).
+    Return the convergence times of section 4.2 with the paper's where published.
+
+    The paper's are kinematic-model values: labelled so off the kinematic plant.
     """
     source = 'paper' if plant == 'kinematic' else 'paper, kinematic'
     present = [c for c in columns if c in runs]
-    lines = ['| convergence time [s] | ' + ' | '.join(_label(c) for c in present) + ' |',
-             '|---|' + '---:|' * len(present)]
+    lines = _table_head('convergence time [s]', [controller_label(c) for c in present])
     rows = (('t_conv', 'position (distance <= 1 mm)'),
             ('theta_r_t_conv', f'theta_r (abs(theta - theta_r) <= {HEADING_TOLERANCE} rad)'),
             ('s_y_t_conv', 's_y (abs(s_y) <= 1 mm)'))
@@ -109,19 +117,19 @@ def convergence_table(runs: dict, columns, plant: str = 'kinematic') -> list[str
     return lines
 
 
-def summary_table(runs: dict) -> list[str]:
-    """Every controller of one run: criteria, convergence and input figures."""
-    lines = ['| controller | IAE [m·s] | ISE [m²·s] | STD [m] | t_conv [s] | final distance [m] '
-             '| max abs omega_raw [rad/s] | steps with omega_raw over limit | '
-             'omega_raw TV, 2nd half [rad/s²] |',
-             '|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+def _summary_table(runs: dict) -> list[str]:
+    """Return a row per controller of one run: criteria, convergence and input figures."""
+    lines = _table_head('controller', [
+        'IAE [m·s]', 'ISE [m²·s]', 'STD [m]', 't_conv [s]', 'final distance [m]',
+        'max abs omega_raw [rad/s]', 'steps with omega_raw over limit',
+        'omega_raw TV, 2nd half [rad/s²]'])
     for name in CONTROLLER_NAMES:
         if name not in runs:
             continue
         r = runs[name]
         lines.append(
-            f"| {_label(name)} | {_num(r['iae'])} | {_num(r['ise'])} | {_num(r['std'])} | "
-            f"{_time(r['t_conv'])} | {_num(r['final_distance'])} | "
+            f"| {controller_label(name)} | {_num(r['iae'])} | {_num(r['ise'])} | "
+            f"{_num(r['std'])} | {_time(r['t_conv'])} | {_num(r['final_distance'])} | "
             f"{_num(r['max_abs_omega_raw'], 3)} | {100.0 * r['omega_raw_over_limit']:.2f}% | "
             f"{_num(r['omega_raw_tv'], 2)} |")
     return lines
@@ -143,25 +151,21 @@ HOLD_COLUMNS = (
 )
 
 
-def hold_table(runs: dict) -> list[str]:
-    """Every controller of one run: how it holds the path (:data:`HOLD_COLUMNS`)."""
-    lines = ['| controller | ' + ' | '.join(header for _, header, _ in HOLD_COLUMNS) + ' |',
-             '|---|' + '---:|' * len(HOLD_COLUMNS)]
+def _hold_table(runs: dict) -> list[str]:
+    """Return a row per controller of one run: how it holds the path (see HOLD_COLUMNS)."""
+    lines = _table_head('controller', [header for _, header, _ in HOLD_COLUMNS])
     for name in CONTROLLER_NAMES:
         if name in runs:
             cells = [cell(runs[name].get(key)) for key, _, cell in HOLD_COLUMNS]
-            lines.append(f'| {_label(name)} | ' + ' | '.join(cells) + ' |')
+            lines.append(f'| {controller_label(name)} | ' + ' | '.join(cells) + ' |')
     return lines
 
 
-def hold_section(document: dict) -> list[str]:
-    """The hold tables of the three runs, with what each column measures."""
-    runs = [('Case 1, x0 = (1, 4, 0)', document.get('case1', {}).get(
-                CASE1_LONGITUDINAL.start_key, {})),
-            ('Case 1, x0 = (4, 1, 0)', document.get('case1', {}).get(
-                CASE1_LATERAL.start_key, {})),
-            ('Case 2, x0 = (1, 1, pi/6), pulses at 5 s and 50 s',
-             document.get('case2', {}).get(CASE2.start_key, {}))]
+def _hold_section(document: dict) -> list[str]:
+    """Return the hold tables of the three runs, with what each column measures."""
+    runs = [('Case 1, x0 = (1, 4, 0)', _runs_of(document, CASE1_LONGITUDINAL)),
+            ('Case 1, x0 = (4, 1, 0)', _runs_of(document, CASE1_LATERAL)),
+            ('Case 2, x0 = (1, 1, pi/6), pulses at 5 s and 50 s', _runs_of(document, CASE2))]
     first = next((r for _, case in runs for r in case.values()), {})
     hold_from = first.get('hold_from')
     kinematic = document.get('plant', 'kinematic') == 'kinematic'
@@ -181,7 +185,7 @@ def hold_section(document: dict) -> list[str]:
         '',
     ]
     for title, case in runs:
-        lines += [f'### {title}', '', *hold_table(case), '']
+        lines += [f'### {title}', '', *_hold_table(case), '']
     lines += ['In Case 2 the 50 s pulse steps omega by 0.5 rad/s within one tick, so every '
               "law's steer command jumps then: its steer columns show the pulse, not chatter.",
               '']
@@ -192,29 +196,29 @@ def _band_explanation(bands: dict, eps: float, plant: str) -> str:
     holding = [n for n in INNER_COLUMNS[:2] if bands[n] is not None and bands[n] <= eps]
     if not holding or plant != 'kinematic':
         return ''
-    return (f" {' and '.join(_label(n) for n in holding)} holds the band too: with its "
+    return (f" {' and '.join(controller_label(n) for n in holding)} holds the band too: with its "
             'tuned rate above the 0.5 rad/s pulse and a 1 kHz loop on the kinematic model, '
             'nothing in the plant lets theta_e drift further (the paper reports about '
             '+-0.18 rad for the other loops).')
 
 
 def paper_findings(document: dict) -> list[Finding]:
-    """The paper's qualitative findings (section 4.2) checked against our runs."""
+    """Check the paper's qualitative findings (section 4.2) against our runs."""
     findings = []
-    case1 = document.get('case1', {}).get(CASE1_LONGITUDINAL.start_key, {})
-    case2 = document.get('case2', {}).get(CASE2.start_key, {})
+    case1 = _runs_of(document, CASE1_LONGITUDINAL)
+    case2 = _runs_of(document, CASE2)
     paper_methods = [n for n in TABLE2_COLUMNS if n in case1 and case1[n]['iae'] is not None]
     if 'dlsmc' in paper_methods and len(paper_methods) > 1:
         best_iae = min(paper_methods, key=lambda n: case1[n]['iae'])
         best_std = min(paper_methods, key=lambda n: case1[n]['std'])
-        ranking = ', '.join(f"{_label(n)} {case1[n]['iae']:.3f} / {case1[n]['std']:.4f}"
+        ranking = ', '.join(f"{controller_label(n)} {case1[n]['iae']:.3f} / {case1[n]['std']:.4f}"
                             for n in sorted(paper_methods, key=lambda n: case1[n]['iae']))
         lowest = best_iae == 'dlsmc' and best_std == 'dlsmc'
+        why = ('' if lowest else " The DLSMC runs the paper's untuned gains against baselines "
+               'tuned on this very criterion (see Tuning below).')
         findings.append(Finding(
             "DLSMC has the lowest IAE and STD among the paper's methods on Case 1 (1, 4, 0).",
-            lowest, f'IAE / STD, lowest IAE first: {ranking}.' + ('' if lowest else
-                " The DLSMC runs the paper's untuned gains against baselines tuned on this "
-                'very criterion (see Tuning below).')))
+            lowest, f'IAE / STD, lowest IAE first: {ranking}.{why}'))
     if 'dsmc' in case1:
         r = case1['dsmc']
         findings.append(Finding(
@@ -229,17 +233,20 @@ def paper_findings(document: dict) -> list[Finding]:
         dl = case1.get('dlsmc')
         versus = ('' if dl is None else
                   f" (DLSMC: max {_num(dl['max_abs_omega_raw'], 2)} rad/s, "
-                  f"{100.0 * dl['omega_raw_over_limit']:.2f}% of steps, TV {_num(dl['omega_raw_tv'], 2)})")
+                  f"{100.0 * dl['omega_raw_over_limit']:.2f}% of steps, "
+                  f"TV {_num(dl['omega_raw_tv'], 2)})")
+        why = ''
+        if not (breaks and chatters):
+            why = (' The search chose small switching gains P1, P2 (gains file), which leave '
+                   'the law nearly continuous'
+                   + ('; its omega still leaves the limit during the return.' if breaks else
+                      ', and a slow return keeps omega inside the limit.'))
         findings.append(Finding(
             "CSMC's omega chatters and breaks its limit without saturation.", breaks and chatters,
             f"CSMC before saturation: max abs omega {_num(r['max_abs_omega_raw'], 2)} rad/s, "
             f"{100.0 * r['omega_raw_over_limit']:.2f}% of steps beyond 1.59 rad/s, total "
             f"variation over the second half {_num(r['omega_raw_tv'], 2)} rad/s² (chattering "
-            f'above {CHATTER_TV:g}){versus}.' + ('' if breaks and chatters else
-                ' The search chose small switching gains P1, P2 (gains file), which leave the '
-                'law nearly continuous' + ('; its omega still leaves the limit during the '
-                                           'return.' if breaks else
-                                           ', and a slow return keeps omega inside the limit.'))))
+            f'above {CHATTER_TV:g}){versus}.{why}'))
     if all(n in case2 for n in INNER_COLUMNS):
         eps = InnerLoopGains().eps
         bands = {n: case2[n]['theta_e_band'] for n in INNER_COLUMNS}
@@ -250,16 +257,16 @@ def paper_findings(document: dict) -> list[Finding]:
             'settle to a wider band.', inside and wider,
             'max abs theta_e over [{:g}, {:g}) s without {:g} s after each pulse start: '.format(
                 *BAND_WINDOW, PULSE_RECOVERY)
-            + ', '.join(f'{_label(n)} {_num(bands[n], 5)} rad' for n in INNER_COLUMNS)
+            + ', '.join(f'{controller_label(n)} {_num(bands[n], 5)} rad' for n in INNER_COLUMNS)
             + f' (epsilon = {eps:g} rad).'
             + _band_explanation(bands, eps, document.get('plant', 'kinematic'))))
     return findings
 
 
-def difference_notes(document: dict) -> list[str]:
-    """Why our numbers differ from the paper's where they do, with the figures that show it."""
-    case1 = document.get('case1', {}).get(CASE1_LONGITUDINAL.start_key, {})
-    case2 = document.get('case2', {}).get(CASE2.start_key, {})
+def _difference_notes(document: dict) -> list[str]:
+    """Return why our numbers differ from the paper's where they do, with the figures."""
+    case1 = _runs_of(document, CASE1_LONGITUDINAL)
+    case2 = _runs_of(document, CASE2)
     notes = [
         "- **Tuning.** The DLSMC runs the paper's published gains, untuned. Every other "
         'method had its gains chosen by the same random search (budget and objective in the '
@@ -308,7 +315,7 @@ def difference_notes(document: dict) -> list[str]:
 
 
 #: Groups of "which laws hold up on the robot", in the order tested: (key, title, why).
-#: A controller falls in the first group whose test it meets (:func:`robot_group`).
+#: A controller falls in the first group whose test it meets (:func:`_robot_group`).
 ROBOT_GROUPS = (
     ('chatter', 'Chatter: omega at its limits',
      'A discontinuous switching term (a sign, or a terminal power with an infinite slope '
@@ -344,21 +351,21 @@ JOINT_CAP_SHARE = 0.9
 
 
 def _worst(runs: list[dict], key: str) -> float:
-    """The largest ``key`` over ``runs`` (None counts as 0)."""
+    """Return the largest ``key`` over ``runs`` (None counts as 0)."""
     return max(r[key] or 0.0 for r in runs)
 
 
 def _scenario_runs(document: dict) -> list[dict]:
-    """The runs of Case 1 (1, 4, 0), Case 1 (4, 1, 0) and Case 2, in that order."""
-    return [document.get(s.case, {}).get(s.start_key, {})
-            for s in (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)]
+    """Return the runs of Case 1 (1, 4, 0), Case 1 (4, 1, 0) and Case 2, in that order."""
+    return [_runs_of(document, s) for s in (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)]
 
 
-def robot_group(figures: list[dict], steer_cap: float) -> str:
+def _robot_group(figures: list[dict], steer_cap: float) -> str:
     """
-    The :data:`ROBOT_GROUPS` key of one controller from its runs ``figures`` (Case 1
-    twice, then Case 2; the steer joints are judged on Case 1 only, where no pulse steps
-    the command) and the joints' rate cap [rad/s].
+    Return the :data:`ROBOT_GROUPS` key of one controller.
+
+    From its runs ``figures`` (Case 1 twice, then Case 2; the steer joints are judged on
+    Case 1 only, where no pulse steps the command) and the joints' rate cap [rad/s].
     """
     if _worst(figures, 'hold_omega_saturated') > CHATTER_SHARE:
         return 'chatter'
@@ -374,9 +381,9 @@ def robot_group(figures: list[dict], steer_cap: float) -> str:
 
 
 def _evidence(name: str, figures: list[dict]) -> str:
-    """One line of figures, the worst over the runs (steer rates: over Case 1)."""
+    """Return one line of figures, the worst over the runs (steer rates: over Case 1)."""
     case1 = figures[:2]
-    return (f'- {_label(name)}: omega at its limit '
+    return (f'- {controller_label(name)}: omega at its limit '
             f"{_share(_worst(figures, 'hold_omega_saturated'))}, distance p99 "
             f"{format_metric(_worst(figures, 'hold_distance_p99'))} m, final distance "
             f"{format_metric(_worst(figures, 'final_distance'))} m, steer command / joint rate "
@@ -384,15 +391,17 @@ def _evidence(name: str, figures: list[dict]) -> str:
             f"{format_metric(_worst(case1, 'hold_steer_joint_rate_max'))} rad/s")
 
 
-def robot_section(document: dict) -> list[str]:
+def _robot_section(document: dict) -> list[str]:
     """
-    "Which laws hold up on the robot and why": every controller of a pybullet run in
-    its :data:`ROBOT_GROUPS` group, with the figures that put it there.
+    Return the section "Which laws hold up on the robot and why".
+
+    Every controller of a pybullet run in its :data:`ROBOT_GROUPS` group, with the figures
+    that put it there.
     """
     steer_cap = _steer_rate_limit()
     runs = _scenario_runs(document)
     figures = {n: [r[n] for r in runs] for n in CONTROLLER_NAMES if all(n in r for r in runs)}
-    groups = {n: robot_group(f, steer_cap) for n, f in figures.items()}
+    groups = {n: _robot_group(f, steer_cap) for n, f in figures.items()}
     lines = [
         '## Which laws hold up on the robot and why',
         '',
@@ -439,14 +448,14 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
                  seconds: float, runs: int, jobs: int, notes: str = '',
                  duration: float = CASE1_LONGITUDINAL.duration) -> None:
     """
-    Write ``report.md`` for the plant ``document["plant"]`` (kinematic if absent) and
-    runs of ``duration`` [s].
+    Write ``report.md`` of runs of ``duration`` [s].
+
+    The plant is ``document["plant"]`` (kinematic if absent).
     """
     plant = document.get('plant', 'kinematic')
-    case1 = document.get('case1', {})
-    case2 = document.get('case2', {}).get(CASE2.start_key, {})
-    long_runs = case1.get(CASE1_LONGITUDINAL.start_key, {})
-    lat_runs = case1.get(CASE1_LATERAL.start_key, {})
+    case2 = _runs_of(document, CASE2)
+    long_runs = _runs_of(document, CASE1_LONGITUDINAL)
+    lat_runs = _runs_of(document, CASE1_LATERAL)
     others = [n for n in CONTROLLER_NAMES if n not in TABLE2_COLUMNS]
     paper_note = ([] if plant == 'kinematic' else [
         f"On the {plant} chassis: the paper's rows are its kinematic-model values, printed "
@@ -459,49 +468,49 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         '## Table 2 — Case 1, x0 = (1, 4, 0): distance error',
         '',
         *paper_note,
-        *criteria_table(long_runs, TABLE2_COLUMNS, PAPER_TABLE2, plant=plant),
+        *_criteria_table(long_runs, TABLE2_COLUMNS, PAPER_TABLE2, plant=plant),
         '',
         "Controllers the paper's Table 2 does not have, same run:",
         '',
-        *criteria_table(long_runs, others, {}),
+        *_criteria_table(long_runs, others, {}),
         '',
         '### Convergence times, Case 1 (1, 4, 0) (section 4.2, Figs 8b, 9b, 12)',
         '',
-        *convergence_table(long_runs, TABLE2_COLUMNS + tuple(others), plant),
+        *_convergence_table(long_runs, TABLE2_COLUMNS + tuple(others), plant),
         '',
         '### Every controller, Case 1 (1, 4, 0)',
         '',
-        *summary_table(long_runs),
+        *_summary_table(long_runs),
         '',
         '## Case 1, x0 = (4, 1, 0) (Fig. 7a; the paper publishes no table for it)',
         '',
-        *summary_table(lat_runs),
+        *_summary_table(lat_runs),
         '',
         '## Table 3 — Case 2, x0 = (1, 1, pi/6): theta_e = theta - theta_d [rad]',
         '',
         *paper_note,
-        *criteria_table(case2, ATTITUDE_COLUMNS, PAPER_TABLE3, 'theta_e_', plant),
+        *_criteria_table(case2, ATTITUDE_COLUMNS, PAPER_TABLE3, 'theta_e_', plant),
         '',
         f'The same criteria from t = {BAND_WINDOW[0]:g} s on (the return is over; the '
         '50 s pulse included):',
         '',
-        *criteria_table(case2, ATTITUDE_COLUMNS, {}, 'theta_e_settled_'),
+        *_criteria_table(case2, ATTITUDE_COLUMNS, {}, 'theta_e_settled_'),
         '',
         '## Table 4 — Case 2: theta - theta_r [rad]',
         '',
         *paper_note,
-        *criteria_table(case2, ATTITUDE_COLUMNS, PAPER_TABLE4, 'theta_r_', plant),
+        *_criteria_table(case2, ATTITUDE_COLUMNS, PAPER_TABLE4, 'theta_r_', plant),
         '',
         f'From t = {BAND_WINDOW[0]:g} s on:',
         '',
-        *criteria_table(case2, ATTITUDE_COLUMNS, {}, 'theta_r_settled_'),
+        *_criteria_table(case2, ATTITUDE_COLUMNS, {}, 'theta_r_settled_'),
         '',
         '### Every controller, Case 2',
         '',
-        *summary_table(case2),
+        *_summary_table(case2),
         '',
-        *hold_section(document),
-        *([] if plant == 'kinematic' else robot_section(document)),
+        *_hold_section(document),
+        *([] if plant == 'kinematic' else _robot_section(document)),
         "## The paper's findings, checked" + ('' if plant == 'kinematic' else
                                               " on the chassis (the paper's: kinematic)"),
         '',
@@ -511,7 +520,7 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
                    None: '**not checked**'}[finding.reproduced]
         lines += [f'- {finding.claim} — {verdict}. {finding.evidence}', '']
     lines += ['## Where and why the numbers differ from the paper', '',
-              *difference_notes(document), '']
+              *_difference_notes(document), '']
     if notes:
         lines += [notes, '']
     lines += ['## Figures', '']
@@ -522,5 +531,5 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
 
 
 def _steer_rate_limit() -> float:
-    """The steer joints' rate limit [rad/s] of the default pybullet chassis."""
+    """Return the steer joints' rate limit [rad/s] of the default pybullet chassis."""
     return robot_plant('pybullet').settings({}).world.motors.steer_rate_limit

@@ -1,7 +1,8 @@
 """
-The paper's comparison scenarios (section 4.2): the sine reference, 100 s at 1 ms,
-Case 1 from two starts without disturbance, Case 2 with the yaw-rate pulses; on the
-kinematic model (3) or the pybullet chassis.
+The paper's comparison scenarios (section 4.2).
+
+The sine reference, 100 s at 1 ms, Case 1 from two starts without disturbance, Case 2
+with the yaw-rate pulses; on the kinematic model (3) or the pybullet chassis.
 """
 
 from dataclasses import dataclass
@@ -46,7 +47,7 @@ class Scenario:
 
     @property
     def start_key(self) -> str:
-        """The start as the key of ``results.json``, e.g. ``"1,4,0"``."""
+        """Return the start as the key of ``results.json``, e.g. ``"1,4,0"``."""
         return ','.join(f'{value:.6g}' for value in self.x0)
 
 
@@ -61,13 +62,13 @@ SCENARIOS = (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)
 def run_scenario(name: str, block: dict | None, scenario: Scenario,
                  plant: str = 'kinematic') -> SimResult:
     """
-    Controller ``name`` with gain block ``block`` on ``scenario`` (paper sine, paper
-    limits) on ``plant`` (one of :data:`PLANTS`).
+    Run controller ``name`` with gain block ``block`` on ``scenario`` and ``plant``.
 
-    On the kinematic model the result's ``steer`` holds the steer angles [rad] the double
-    Ackermann mapping would command for (v, omega + disturbance); on pybullet the
-    disturbance is added to omega before the wheel mapping and the chassis is that of the
-    default world of the registered ``pybullet`` plant (Table 1, physics at 1 ms).
+    The paper's sine and limits; ``plant`` is one of :data:`PLANTS`. On the kinematic model
+    the result's ``steer`` holds the steer angles [rad] the double Ackermann mapping would
+    command for (v, omega + disturbance); on pybullet the disturbance is added to omega
+    before the wheel mapping and the chassis is that of the default world of the registered
+    ``pybullet`` plant (Table 1, physics at 1 ms).
     """
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")

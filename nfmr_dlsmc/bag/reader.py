@@ -65,11 +65,11 @@ class BagContents:
     unread_bytes: int = 0
 
     def of(self, topic: str) -> list:
-        """The messages of one topic, in order."""
+        """Return the messages of one topic, in order."""
         return [m for m in self.messages if m.topic == topic]
 
     def warning(self) -> str | None:
-        """A one-line note when the bag was truncated, else None."""
+        """Return a one-line note when the bag was truncated, else None."""
         if not self.truncated:
             return None
         span = (self.messages[-1].log_time - self.messages[0].log_time) * 1e-9 \
@@ -80,7 +80,7 @@ class BagContents:
 
 
 def mcap_file(path) -> Path:
-    """The ``.mcap`` file of a bag directory, or ``path`` itself if it is a file."""
+    """Return the ``.mcap`` file of a bag directory, or ``path`` itself if it is a file."""
     path = Path(path)
     if not path.exists():
         raise BagError(f'{path}: no such file or directory')

@@ -46,7 +46,7 @@ class ReindexResult:
 
 
 def _profiles(metadata: dict) -> list:
-    """The offered QoS profiles of a channel's metadata (rosbag2 stores them as YAML)."""
+    """Return the offered QoS profiles of a channel's metadata (rosbag2's YAML)."""
     try:
         profiles = yaml.safe_load(metadata.get('offered_qos_profiles', '') or '') or []
     except yaml.YAMLError:

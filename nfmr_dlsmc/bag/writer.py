@@ -30,8 +30,10 @@ def _interface_file(type_name: str, suffix: str) -> Path:
 
 def message_definition(type_name: str) -> str:
     """
-    The ``ros2msg`` schema text of ``pkg/msg/Type``: its ``.msg`` followed by every type
-    it references, each after a line of 80 ``=`` and ``MSG: pkg/Type`` (as rosbag2 writes).
+    Return the ``ros2msg`` schema text of ``pkg/msg/Type``.
+
+    Its ``.msg`` followed by every type it references, each after a line of 80 ``=`` and
+    ``MSG: pkg/Type`` (as rosbag2 writes).
     """
     text = _interface_file(type_name, '.msg').read_text()
     description = json.loads(_interface_file(type_name, '.json').read_text())
@@ -46,7 +48,7 @@ def message_definition(type_name: str) -> str:
 
 
 def type_hash(type_name: str) -> str:
-    """The RIHS01 type description hash of ``pkg/msg/Type``."""
+    """Return the RIHS01 type description hash of ``pkg/msg/Type``."""
     description = json.loads(_interface_file(type_name, '.json').read_text())
     for entry in description['type_hashes']:
         if entry['type_name'] == type_name:
@@ -69,7 +71,7 @@ class QosProfile:
     avoid_ros_namespace_conventions: bool = False
 
     def as_dict(self) -> dict:
-        """The mapping of one entry of ``offered_qos_profiles``."""
+        """Return the mapping of one entry of ``offered_qos_profiles``."""
         duration = lambda d: {'sec': int(d[0]), 'nsec': int(d[1])}  # noqa: E731
         return {'history': self.history, 'depth': self.depth, 'reliability': self.reliability,
                 'durability': self.durability, 'deadline': duration(self.deadline),
@@ -131,7 +133,8 @@ class BagWriter:
 
     def add_topic(self, name: str, type_name: str, qos: list) -> None:
         """
-        Declare a topic before writing its messages (``type_name`` like ``pkg/msg/T``);
+        Declare a topic before writing its messages (``type_name`` like ``pkg/msg/T``).
+
         ``qos``: :class:`QosProfile` objects, or mappings as rosbag2 stores them.
         """
         if name in self._topics:
@@ -163,11 +166,11 @@ class BagWriter:
 
     @property
     def counts(self) -> dict:
-        """Messages written per topic."""
+        """Return the messages written per topic."""
         return {name: t.count for name, t in self._topics.items()}
 
     def metadata(self) -> dict:
-        """The ``rosbag2_bagfile_information`` mapping (version 9)."""
+        """Return the ``rosbag2_bagfile_information`` mapping (version 9)."""
         start = self._first or 0
         duration = max(0, self._last - start)
         total = sum(t.count for t in self._topics.values())

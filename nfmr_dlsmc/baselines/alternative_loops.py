@@ -38,12 +38,12 @@ class CrsmcOuterLoop:
         self.reset()
 
     def reset(self) -> None:
-        """No state besides the last surfaces."""
+        """Zero the last surfaces (the law has no other state)."""
         self.s_x = self.s_y = 0.0
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
-        """Errors [m], reference velocity [m/s] -> (u_x, u_y) [m/s]."""
+        """Map errors [m] and reference velocity [m/s] to (u_x, u_y) [m/s]."""
         g = self.gains
         self.s_x, self.s_y = x_e, y_e
         return (xdot_d - g.rate * saturated_sign(x_e, g.layer),
@@ -63,10 +63,10 @@ class CrsmcInnerLoop:
         self.gains = gains
 
     def reset(self) -> None:
-        """Stateless."""
+        """Do nothing: the law has no state."""
 
     def step(self, s_theta: float, thetadot_d: float, dt: float) -> float:
-        """s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s]."""
+        """Map s_theta [rad] and thetadot_d [rad/s] to the unsaturated omega [rad/s]."""
         return thetadot_d - self.gains.rate * saturated_sign(s_theta, self.gains.layer)
 
 
@@ -84,12 +84,10 @@ class NtsmcOuterLoop:
     -beta sig(e)^r on the surface (finite-time, nonsingular: no negative powers).
     """
 
-    __slots__ = ('gains', '_r', '_started', '_int_x', '_int_y', '_rate_x', '_rate_y',
-                 's_x', 's_y')
+    __slots__ = ('gains', '_int_x', '_int_y', '_rate_x', '_rate_y', 's_x', 's_y')
 
     def __init__(self, gains: NtsmcOuterGains):
         self.gains = gains
-        self._r = gains.q / gains.p
         self.reset()
 
     def reset(self) -> None:
@@ -100,8 +98,9 @@ class NtsmcOuterLoop:
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
-        """Errors [m], reference velocity [m/s] -> (u_x, u_y) [m/s]."""
-        g, r = self.gains, self._r
+        """Map errors [m] and reference velocity [m/s] to (u_x, u_y) [m/s]."""
+        g = self.gains
+        r = g.q / g.p
         self._int_x += self._rate_x * dt
         self._int_y += self._rate_y * dt
         self._rate_x, self._rate_y = sig_pow(x_e, r), sig_pow(y_e, r)
@@ -121,11 +120,10 @@ class NtsmcInnerLoop:
         omega = thetadot_d - beta sig(theta_e)^r - k sig(sigma)^r - eta sign(sigma).
     """
 
-    __slots__ = ('gains', '_r', '_integral', '_rate', 'sigma')
+    __slots__ = ('gains', '_integral', '_rate', 'sigma')
 
     def __init__(self, gains: NtsmcInnerGains):
         self.gains = gains
-        self._r = gains.q / gains.p
         self.reset()
 
     def reset(self) -> None:
@@ -135,8 +133,9 @@ class NtsmcInnerLoop:
         self.sigma = 0.0
 
     def step(self, s_theta: float, thetadot_d: float, dt: float) -> float:
-        """s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s]."""
-        g, r = self.gains, self._r
+        """Map s_theta [rad] and thetadot_d [rad/s] to the unsaturated omega [rad/s]."""
+        g = self.gains
+        r = g.q / g.p
         self._integral += self._rate * dt
         self._rate = sig_pow(s_theta, r)
         sigma = s_theta + g.beta * self._integral
@@ -156,26 +155,16 @@ class BtsmcOuterLoop(BtintsmcOuterLoop):
 
     __slots__ = ()
 
-    def __init__(self, gains: BtsmcOuterGains):
-        super().__init__(gains)
-
-    @property
-    def gains(self) -> BtsmcOuterGains:
-        """The gains in use."""
-        return self._gains
-
-    @gains.setter
-    def gains(self, gains: BtsmcOuterGains) -> None:
-        self._gains = gains
+    def _derive(self, gains: BtsmcOuterGains) -> None:
+        """Set the exponent of alpha; no terminal reaching term, no robot-profile option."""
         self._r2 = gains.q2 / gains.p2
-        self._r3 = math.nan  # no terminal reaching term
+        self._r3 = math.nan
         self._adaptive = False
         self._zone = 0.0
-        self.C1, self.C2 = gains.C1, gains.C2
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
-        """Errors [m], reference velocity [m/s] -> (u_x, u_y) [m/s]."""
+        """Map errors [m] and reference velocity [m/s] to (u_x, u_y) [m/s]."""
         g = self._gains
         s_x, s_y = self._surfaces(x_e, y_e, dt)
         return (xdot_d - g.k * s_x - self.C1 * self.alpha_x,

@@ -5,338 +5,240 @@ Single-loop laws and geometric trackers carry their controller name as prefix
 (``pid.kp``); the loop gains of the alternative cascades carry ``outer`` / ``inner`` and
 are prefixed with the controller name when a controller is built
 (``dl_crsmc.outer.rate``). Defaults are starting points; the tuned values live in
-``config/comparison.yaml`` (see :mod:`nfmr_dlsmc.analysis.baseline_tuning`).
+``config/comparison.yaml`` (see :mod:`nfmr_dlsmc.analysis.baseline_tuning`). Each gain is
+declared once with its unit, meaning and rule (:mod:`nfmr_dlsmc.core.schema`).
 """
 
 from dataclasses import dataclass
 from typing import ClassVar
 
-from nfmr_dlsmc.core.validation import check_exponent_pair, check_non_negative, check_positive
+from nfmr_dlsmc.core.schema import (
+    check_fields,
+    documented,
+    NON_NEGATIVE,
+    ODD_INTEGER,
+    param,
+    POSITIVE,
+)
+from nfmr_dlsmc.core.validation import check_exponent_pair
 
 
-def _check_all_positive(gains, units: dict) -> None:
-    for name, unit in units.items():
-        check_positive(f'{gains.prefix}.{name}', getattr(gains, name), unit)
-
-
-def _check_all_non_negative(gains, units: dict) -> None:
-    for name, unit in units.items():
-        check_non_negative(f'{gains.prefix}.{name}', getattr(gains, name), unit)
-
-
-@dataclass(frozen=True)
-class PidGains:
+class _Gains:
     """
-    PID on the lateral error with a constant forward speed (see :class:`~nfmr_dlsmc.baselines.single_loop.PidController`).
+    Validation of a gain dataclass on construction.
 
-    Attributes
-    ----------
-    v_c : float
-        Constant forward speed [m/s].
-    kp, ki, kd : float
-        Gains on the robot-frame lateral error e2 [rad/(m s)], [rad/(m s^2)], [rad/m], >= 0.
-    k_theta : float
-        Gain on the heading error e3 [1/s], >= 0.
+    Each gain is checked against its own rule in field order, named ``<prefix>.<gain>``;
+    then each pair of odd exponents in ``exponent_pairs``.
+    """
 
+    prefix: ClassVar[str]
+    #: (p, q) field names of the odd exponent pairs, 1 < p/q < 2.
+    exponent_pairs: ClassVar[tuple] = ()
+
+    def __post_init__(self):
+        check_fields(self)
+        for p, q in self.exponent_pairs:
+            check_exponent_pair(f'{self.prefix}.{p}', getattr(self, p),
+                                f'{self.prefix}.{q}', getattr(self, q))
+
+
+@documented
+@dataclass(frozen=True)
+class PidGains(_Gains):
+    """
+    PID on the lateral error with a constant forward speed.
+
+    See :class:`~nfmr_dlsmc.baselines.single_loop.PidController`.
     """
 
     prefix: ClassVar[str] = 'pid'
 
-    v_c: float = 0.53
-    kp: float = 1.0
-    ki: float = 0.05
-    kd: float = 0.5
-    k_theta: float = 1.0
-
-    def __post_init__(self):
-        check_positive(f'{self.prefix}.v_c', self.v_c, 'm/s')
-        _check_all_non_negative(self, {'kp': 'rad/(m*s)', 'ki': 'rad/(m*s^2)', 'kd': 'rad/m',
-                                       'k_theta': '1/s'})
+    v_c: float = param(0.53, 'm/s', 'constant forward speed', POSITIVE)
+    kp: float = param(1.0, 'rad/(m*s)', 'proportional gain on the lateral error e2',
+                      NON_NEGATIVE)
+    ki: float = param(0.05, 'rad/(m*s^2)', 'integral gain on e2', NON_NEGATIVE)
+    kd: float = param(0.5, 'rad/m', 'derivative gain on e2', NON_NEGATIVE)
+    k_theta: float = param(1.0, '1/s', 'gain on the heading error e3', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class CsmcGains:
+class CsmcGains(_Gains):
     """
-    Coupled SMC of Yang & Kim (1999) (see :class:`~nfmr_dlsmc.baselines.single_loop.CsmcController`).
+    Coupled SMC of Yang & Kim (1999).
 
-    Attributes
-    ----------
-    k0 : float
-        Coupling of e3 into the lateral surface [m/(s rad)]. Keep it below the slowest
-        reference speed: the law divides by v_r cos(e3) + k0 sign(e2), which must not
-        change sign as e2 crosses zero (with k0 > v_r the robot leaves even a path it
-        starts on).
-    k1, k2 : float
-        Surface slopes of e1 and e2 [1/s].
-    Q1, Q2 : float
-        Proportional reaching gains [1/s].
-    P1, P2 : float
-        Switching gains [m/s^2].
-
+    See :class:`~nfmr_dlsmc.baselines.single_loop.CsmcController`. Keep ``k0`` below the
+    slowest reference speed: the law divides by v_r cos(e3) + k0 sign(e2), which must not
+    change sign as e2 crosses zero (with k0 > v_r the robot leaves even a path it starts
+    on).
     """
 
     prefix: ClassVar[str] = 'csmc'
 
-    k0: float = 0.2
-    k1: float = 1.0
-    k2: float = 1.0
-    Q1: float = 1.0
-    Q2: float = 1.0
-    P1: float = 0.05
-    P2: float = 0.05
-
-    def __post_init__(self):
-        _check_all_positive(self, {'k0': 'm/(s*rad)', 'k1': '1/s', 'k2': '1/s', 'Q1': '1/s',
-                                   'Q2': '1/s'})
-        _check_all_non_negative(self, {'P1': 'm/s^2', 'P2': 'm/s^2'})
+    k0: float = param(0.2, 'm/(s*rad)', 'coupling of e3 into the lateral surface', POSITIVE)
+    k1: float = param(1.0, '1/s', 'surface slope of e1', POSITIVE)
+    k2: float = param(1.0, '1/s', 'surface slope of e2', POSITIVE)
+    Q1: float = param(1.0, '1/s', 'proportional reaching gain of s1', POSITIVE)
+    Q2: float = param(1.0, '1/s', 'proportional reaching gain of s2', POSITIVE)
+    P1: float = param(0.05, 'm/s^2', 'switching gain of s1', NON_NEGATIVE)
+    P2: float = param(0.05, 'm/s^2', 'switching gain of s2', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class DsmcGains:
+class DsmcGains(_Gains):
     """
-    Decoupled SMC by pseudo-inverse (see :class:`~nfmr_dlsmc.baselines.single_loop.DsmcController`).
+    Decoupled SMC by pseudo-inverse.
 
-    Attributes
-    ----------
-    Q1, Q2, Q3 : float
-        Proportional reaching gains of e1, e2, e3 [1/s].
-    P1, P2 : float
-        Switching gains of e1, e2 [m/s].
-    P3 : float
-        Switching gain of e3 [rad/s].
-
+    See :class:`~nfmr_dlsmc.baselines.single_loop.DsmcController`.
     """
 
     prefix: ClassVar[str] = 'dsmc'
 
-    Q1: float = 1.0
-    Q2: float = 1.0
-    Q3: float = 1.0
-    P1: float = 0.01
-    P2: float = 0.01
-    P3: float = 0.01
-
-    def __post_init__(self):
-        _check_all_positive(self, {'Q1': '1/s', 'Q2': '1/s', 'Q3': '1/s'})
-        _check_all_non_negative(self, {'P1': 'm/s', 'P2': 'm/s', 'P3': 'rad/s'})
+    Q1: float = param(1.0, '1/s', 'proportional reaching gain of e1', POSITIVE)
+    Q2: float = param(1.0, '1/s', 'proportional reaching gain of e2', POSITIVE)
+    Q3: float = param(1.0, '1/s', 'proportional reaching gain of e3', POSITIVE)
+    P1: float = param(0.01, 'm/s', 'switching gain of e1', NON_NEGATIVE)
+    P2: float = param(0.01, 'm/s', 'switching gain of e2', NON_NEGATIVE)
+    P3: float = param(0.01, 'rad/s', 'switching gain of e3', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class PurePursuitGains:
+class PurePursuitGains(_Gains):
     """
-    Pure pursuit (see :class:`~nfmr_dlsmc.baselines.geometric_trackers.PurePursuitController`).
+    Pure pursuit.
 
-    Attributes
-    ----------
-    lookahead : float
-        Distance of the goal point ahead of the reference point along theta_r [m].
-    k_v : float
-        Speed gain on the along-track error [1/s], >= 0.
-
+    See :class:`~nfmr_dlsmc.baselines.geometric_trackers.PurePursuitController`.
     """
 
     prefix: ClassVar[str] = 'pure_pursuit'
 
-    lookahead: float = 1.0
-    k_v: float = 1.0
-
-    def __post_init__(self):
-        check_positive(f'{self.prefix}.lookahead', self.lookahead, 'm')
-        check_non_negative(f'{self.prefix}.k_v', self.k_v, '1/s')
+    lookahead: float = param(1.0, 'm', 'distance of the goal point ahead of the reference '
+                             'point along theta_r', POSITIVE)
+    k_v: float = param(1.0, '1/s', 'speed gain on the along-track error', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class StanleyGains:
+class StanleyGains(_Gains):
     """
-    Stanley (see :class:`~nfmr_dlsmc.baselines.geometric_trackers.StanleyController`).
+    Stanley.
 
-    Attributes
-    ----------
-    k : float
-        Cross-track gain [1/s].
-    k_soft : float
-        Softening speed [m/s], > 0.
-    k_heading : float
-        Yaw-rate gain on the steering angle [1/s].
-    k_v : float
-        Speed gain on the along-track error [1/s], >= 0.
-
+    See :class:`~nfmr_dlsmc.baselines.geometric_trackers.StanleyController`.
     """
 
     prefix: ClassVar[str] = 'stanley'
 
-    k: float = 1.0
-    k_soft: float = 0.1
-    k_heading: float = 2.0
-    k_v: float = 1.0
-
-    def __post_init__(self):
-        _check_all_positive(self, {'k': '1/s', 'k_soft': 'm/s', 'k_heading': '1/s'})
-        check_non_negative(f'{self.prefix}.k_v', self.k_v, '1/s')
+    k: float = param(1.0, '1/s', 'cross-track gain', POSITIVE)
+    k_soft: float = param(0.1, 'm/s', 'softening speed', POSITIVE)
+    k_heading: float = param(2.0, '1/s', 'yaw-rate gain on the steering angle', POSITIVE)
+    k_v: float = param(1.0, '1/s', 'speed gain on the along-track error', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class KanayamaGains:
+class KanayamaGains(_Gains):
     """
-    Kanayama's tracking law (see :class:`~nfmr_dlsmc.baselines.geometric_trackers.KanayamaController`).
+    Kanayama's tracking law.
 
-    Attributes
-    ----------
-    k_x : float
-        Along-track gain [1/s].
-    k_y : float
-        Lateral gain [1/m^2].
-    k_theta : float
-        Heading gain [1/m].
-
+    See :class:`~nfmr_dlsmc.baselines.geometric_trackers.KanayamaController`.
     """
 
     prefix: ClassVar[str] = 'kanayama'
 
-    k_x: float = 1.0
-    k_y: float = 4.0
-    k_theta: float = 2.0
-
-    def __post_init__(self):
-        _check_all_positive(self, {'k_x': '1/s', 'k_y': '1/m^2', 'k_theta': '1/m'})
+    k_x: float = param(1.0, '1/s', 'along-track gain', POSITIVE)
+    k_y: float = param(4.0, '1/m^2', 'lateral gain', POSITIVE)
+    k_theta: float = param(2.0, '1/m', 'heading gain', POSITIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class CrsmcOuterGains:
+class CrsmcOuterGains(_Gains):
     """
-    Constant-rate position loop (see :class:`~nfmr_dlsmc.baselines.alternative_loops.CrsmcOuterLoop`).
+    Constant-rate position loop.
 
-    Attributes
-    ----------
-    rate : float
-        Reaching rate [m/s].
-    layer : float
-        Boundary-layer width [m], >= 0 (0: the plain sign).
-
+    See :class:`~nfmr_dlsmc.baselines.alternative_loops.CrsmcOuterLoop`.
     """
 
     prefix: ClassVar[str] = 'outer'
 
-    rate: float = 0.6
-    layer: float = 0.05
-
-    def __post_init__(self):
-        check_positive(f'{self.prefix}.rate', self.rate, 'm/s')
-        check_non_negative(f'{self.prefix}.layer', self.layer, 'm')
+    rate: float = param(0.6, 'm/s', 'reaching rate', POSITIVE)
+    layer: float = param(0.05, 'm', 'boundary-layer width (0: the plain sign)', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class CrsmcInnerGains:
+class CrsmcInnerGains(_Gains):
     """
-    Constant-rate attitude loop (see :class:`~nfmr_dlsmc.baselines.alternative_loops.CrsmcInnerLoop`).
+    Constant-rate attitude loop.
 
-    Attributes
-    ----------
-    rate : float
-        Reaching rate [rad/s].
-    layer : float
-        Boundary-layer width [rad], >= 0 (0: the plain sign).
-
+    See :class:`~nfmr_dlsmc.baselines.alternative_loops.CrsmcInnerLoop`.
     """
 
     prefix: ClassVar[str] = 'inner'
 
-    rate: float = 1.0
-    layer: float = 0.0
-
-    def __post_init__(self):
-        check_positive(f'{self.prefix}.rate', self.rate, 'rad/s')
-        check_non_negative(f'{self.prefix}.layer', self.layer, 'rad')
+    rate: float = param(1.0, 'rad/s', 'reaching rate', POSITIVE)
+    layer: float = param(0.0, 'rad', 'boundary-layer width (0: the plain sign)', NON_NEGATIVE)
 
 
+@documented
 @dataclass(frozen=True)
-class NtsmcOuterGains:
+class NtsmcOuterGains(_Gains):
     """
-    Integral terminal position loop (see :class:`~nfmr_dlsmc.baselines.alternative_loops.NtsmcOuterLoop`).
+    Integral terminal position loop.
 
-    Attributes
-    ----------
-    beta : float
-        Weight of the terminal integral [m^(1 - q/p)/s].
-    k : float
-        Terminal reaching gain [m^(1 - q/p)/s].
-    p, q : int
-        Odd exponents, 1 < p/q < 2.
-
+    See :class:`~nfmr_dlsmc.baselines.alternative_loops.NtsmcOuterLoop`.
     """
 
     prefix: ClassVar[str] = 'outer'
+    exponent_pairs: ClassVar[tuple] = (('p', 'q'),)
 
-    beta: float = 0.6
-    k: float = 1.0
-    p: int = 33
-    q: int = 17
-
-    def __post_init__(self):
-        _check_all_positive(self, {'beta': '', 'k': ''})
-        check_exponent_pair(f'{self.prefix}.p', self.p, f'{self.prefix}.q', self.q)
+    beta: float = param(0.6, '', 'weight of the terminal integral, in m^(1 - q/p)/s',
+                        POSITIVE)
+    k: float = param(1.0, '', 'terminal reaching gain, in m^(1 - q/p)/s', POSITIVE)
+    p: int = param(33, '', 'odd exponent of the terminal terms', ODD_INTEGER,
+                   also='1 < p/q < 2')
+    q: int = param(17, '', 'odd exponent of the terminal terms', ODD_INTEGER)
 
 
+@documented
 @dataclass(frozen=True)
-class NtsmcInnerGains:
+class NtsmcInnerGains(_Gains):
     """
-    Integral terminal attitude loop (see :class:`~nfmr_dlsmc.baselines.alternative_loops.NtsmcInnerLoop`).
+    Integral terminal attitude loop.
 
-    Attributes
-    ----------
-    beta : float
-        Weight of the terminal integral [rad^(1 - q/p)/s].
-    k : float
-        Terminal reaching gain [rad^(1 - q/p)/s].
-    eta : float
-        Fixed switching gain [rad/s], >= 0.
-    p, q : int
-        Odd exponents, 1 < p/q < 2.
-
+    See :class:`~nfmr_dlsmc.baselines.alternative_loops.NtsmcInnerLoop`.
     """
 
     prefix: ClassVar[str] = 'inner'
+    exponent_pairs: ClassVar[tuple] = (('p', 'q'),)
 
-    beta: float = 1.0
-    k: float = 1.0
-    eta: float = 0.1
-    p: int = 33
-    q: int = 23
-
-    def __post_init__(self):
-        _check_all_positive(self, {'beta': '', 'k': ''})
-        check_non_negative(f'{self.prefix}.eta', self.eta, 'rad/s')
-        check_exponent_pair(f'{self.prefix}.p', self.p, f'{self.prefix}.q', self.q)
+    beta: float = param(1.0, '', 'weight of the terminal integral, in rad^(1 - q/p)/s',
+                        POSITIVE)
+    k: float = param(1.0, '', 'terminal reaching gain, in rad^(1 - q/p)/s', POSITIVE)
+    eta: float = param(0.1, 'rad/s', 'fixed switching gain', NON_NEGATIVE)
+    p: int = param(33, '', 'odd exponent of the terminal terms', ODD_INTEGER,
+                   also='1 < p/q < 2')
+    q: int = param(23, '', 'odd exponent of the terminal terms', ODD_INTEGER)
 
 
+@documented
 @dataclass(frozen=True)
-class BtsmcOuterGains:
+class BtsmcOuterGains(_Gains):
     """
-    Bounded time-varying position loop with a linear reaching law (see
-    :class:`~nfmr_dlsmc.baselines.alternative_loops.BtsmcOuterLoop`).
+    Bounded time-varying position loop with a linear reaching law.
 
-    Attributes
-    ----------
-    C1, C2 : float
-        Bounded-rate coefficients [m/s] (as in eq. 32).
-    k : float
-        Linear reaching gain [1/s].
-    xi : float
-        Phase boundary [m] (eq. 33).
-    p2, q2 : int
-        Odd exponents of alpha, 1 < p2/q2 < 2.
-
+    See :class:`~nfmr_dlsmc.baselines.alternative_loops.BtsmcOuterLoop`.
     """
 
     prefix: ClassVar[str] = 'outer'
+    exponent_pairs: ClassVar[tuple] = (('p2', 'q2'),)
 
-    C1: float = 0.6
-    C2: float = 0.6
-    k: float = 1.0
-    xi: float = 0.5
-    p2: int = 33
-    q2: int = 17
-
-    def __post_init__(self):
-        _check_all_positive(self, {'C1': 'm/s', 'C2': 'm/s', 'k': '1/s', 'xi': 'm'})
-        check_exponent_pair(f'{self.prefix}.p2', self.p2, f'{self.prefix}.q2', self.q2)
+    C1: float = param(0.6, 'm/s', 'bounded rate of the x axis (as in eq. 32)', POSITIVE)
+    C2: float = param(0.6, 'm/s', 'bounded rate of the y axis (as in eq. 32)', POSITIVE)
+    k: float = param(1.0, '1/s', 'linear reaching gain', POSITIVE)
+    xi: float = param(0.5, 'm', 'phase boundary, eq. (33)', POSITIVE)
+    p2: int = param(33, '', 'odd exponent of alpha, eq. (33)', ODD_INTEGER,
+                    also='1 < p2/q2 < 2')
+    q2: int = param(17, '', 'odd exponent of alpha, eq. (33)', ODD_INTEGER)

@@ -1,6 +1,7 @@
 """
-Trackers a robotics engineer would otherwise reach for, on the unicycle (v, omega)
-interface: pure pursuit, Stanley and Kanayama's kinematic tracking law.
+Trackers a robotics engineer would otherwise reach for, on the unicycle (v, omega) interface.
+
+Pure pursuit, Stanley and Kanayama's kinematic tracking law.
 """
 
 import math
@@ -77,11 +78,12 @@ class StanleyController(SingleLoopController):
 
 class KanayamaController(SingleLoopController):
     """
-    Kanayama's stable tracking law (Kanayama et al., ICRA 1990, eq. 6):
+    Kanayama's stable tracking law (Kanayama et al., ICRA 1990, eq. 6).
 
         v = v_r cos e3 + k_x e1,   omega = omega_r + v_r (k_y e2 + k_theta sin e3),
 
-    with the robot-frame errors (e1, e2, e3) of :func:`~nfmr_dlsmc.baselines.path_frame.robot_frame_errors`.
+    with the robot-frame errors (e1, e2, e3) of
+    :func:`~nfmr_dlsmc.baselines.path_frame.robot_frame_errors`.
     """
 
     name = 'kanayama'

@@ -1,6 +1,8 @@
 """
-Tracking errors in the robot frame and reference rates, for the single-loop laws and
-the geometric trackers (the DLSMC works with global-frame errors, eq. 8).
+Tracking errors in the robot frame, and reference rates.
+
+For the single-loop laws and the geometric trackers (the DLSMC works with global-frame
+errors, eq. 8).
 """
 
 import math
@@ -11,7 +13,7 @@ from nfmr_dlsmc.core.angles import wrap_angle
 def robot_frame_errors(x: float, y: float, theta: float, x_d: float, y_d: float,
                        theta_r: float) -> tuple[float, float, float]:
     """
-    Kanayama's tracking errors (Kanayama et al., ICRA 1990, eq. 4).
+    Return Kanayama's tracking errors (Kanayama et al., ICRA 1990, eq. 4).
 
     e1 = cos(theta)(x_d - x) + sin(theta)(y_d - y)    reference ahead of P [m]
     e2 = -sin(theta)(x_d - x) + cos(theta)(y_d - y)   reference to the left of P [m]
@@ -30,7 +32,7 @@ def robot_frame_errors(x: float, y: float, theta: float, x_d: float, y_d: float,
 
 def robot_frame_error_rates(e1: float, e2: float, e3: float, v: float, omega: float,
                             v_r: float, omega_r: float) -> tuple[float, float, float]:
-    """(e1', e2', e3') of :func:`robot_frame_errors` for inputs (v [m/s], omega [rad/s])."""
+    """Return (e1', e2', e3') of :func:`robot_frame_errors` for inputs (v [m/s], omega [rad/s])."""
     return (omega * e2 - v + v_r * math.cos(e3), -omega * e1 + v_r * math.sin(e3),
             omega_r - omega)
 

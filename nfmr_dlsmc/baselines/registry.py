@@ -1,47 +1,32 @@
 """
-Every tracking controller of nfmr by name, built from one gain block each
-(``config/comparison.yaml``), with the same (v, omega) interface and input limits.
+Every tracking controller of nfmr by name, each built from one gain block.
 
-``dlsmc`` and ``dlsmc_robot`` are the same law (:class:`~nfmr_dlsmc.core.dlsmc.DlsmcController`);
-they differ only in their blocks: the paper's gains, and the robot profile of
-``config/robot_case1.yaml`` (the paper's gains with the four robot options on).
+The blocks are those of ``config/comparison.yaml``; every controller has the same
+(v, omega) interface and input limits.
+
+``dlsmc`` and ``dlsmc_robot`` are the same law
+(:class:`~nfmr_dlsmc.core.dlsmc.DlsmcController`); they differ only in their blocks: the
+paper's gains, and the robot profile of ``config/robot_case1.yaml`` (the paper's gains with
+the four robot options on).
 """
 
 from dataclasses import fields
-from pathlib import Path
 
-from nfmr_dlsmc.baselines.alternative_loops import (
-    BtsmcOuterLoop,
-    CrsmcInnerLoop,
-    CrsmcOuterLoop,
-    NtsmcInnerLoop,
-    NtsmcOuterLoop,
+from nfmr_dlsmc.baselines import (
+    alternative_loops as loops,
 )
-from nfmr_dlsmc.baselines.gains import (
-    BtsmcOuterGains,
-    CrsmcInnerGains,
-    CrsmcOuterGains,
-    CsmcGains,
-    DsmcGains,
-    KanayamaGains,
-    NtsmcInnerGains,
-    NtsmcOuterGains,
-    PidGains,
-    PurePursuitGains,
-    StanleyGains,
+from nfmr_dlsmc.baselines import (
+    gains,
+    single_loop,
 )
-from nfmr_dlsmc.baselines.geometric_trackers import (
-    KanayamaController,
-    PurePursuitController,
-    StanleyController,
+from nfmr_dlsmc.baselines import (
+    geometric_trackers as trackers,
 )
-from nfmr_dlsmc.baselines.single_loop import CsmcController, DsmcController, PidController
 from nfmr_dlsmc.core.cascade import CascadeController
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
 from nfmr_dlsmc.core.validation import ParameterError
-import yaml
 
 #: Display names, in the order of the paper's tables, then the other trackers, then the
 #: robot profile last (``nfmr-tune-baselines`` seeds each controller by its index here).
@@ -62,13 +47,19 @@ CONTROLLER_LABELS = {
 }
 CONTROLLER_NAMES = tuple(CONTROLLER_LABELS)
 
+
+def controller_label(name: str) -> str:
+    """Return the display name of a controller (the name itself for one not listed)."""
+    return CONTROLLER_LABELS.get(name, name)
+
+
 _SINGLE_LOOP = {
-    'pid': (PidController, PidGains),
-    'csmc': (CsmcController, CsmcGains),
-    'dsmc': (DsmcController, DsmcGains),
-    'pure_pursuit': (PurePursuitController, PurePursuitGains),
-    'stanley': (StanleyController, StanleyGains),
-    'kanayama': (KanayamaController, KanayamaGains),
+    'pid': (single_loop.PidController, gains.PidGains),
+    'csmc': (single_loop.CsmcController, gains.CsmcGains),
+    'dsmc': (single_loop.DsmcController, gains.DsmcGains),
+    'pure_pursuit': (trackers.PurePursuitController, gains.PurePursuitGains),
+    'stanley': (trackers.StanleyController, gains.StanleyGains),
+    'kanayama': (trackers.KanayamaController, gains.KanayamaGains),
 }
 
 #: The DLSMC's blocks: ``outer`` and ``inner`` sections and these DlsmcConfig options.
@@ -76,17 +67,20 @@ _DLSMC_NAMES = ('dlsmc', 'dlsmc_robot')
 _DLSMC_OPTIONS = ('thetadot_source', 'thetadot_filter')
 
 # name -> ((outer loop, its gains), (inner loop, its gains))
+_CRSMC_INNER = (loops.CrsmcInnerLoop, gains.CrsmcInnerGains)
+_NTSMC_INNER = (loops.NtsmcInnerLoop, gains.NtsmcInnerGains)
+_BTINTSMC_OUTER = (BtintsmcOuterLoop, OuterLoopGains)
 _CASCADES = {
-    'dl_crsmc': ((CrsmcOuterLoop, CrsmcOuterGains), (CrsmcInnerLoop, CrsmcInnerGains)),
-    'dntsmc': ((NtsmcOuterLoop, NtsmcOuterGains), (NtsmcInnerLoop, NtsmcInnerGains)),
-    'btsmc_ntsmc': ((BtsmcOuterLoop, BtsmcOuterGains), (NtsmcInnerLoop, NtsmcInnerGains)),
-    'btintsmc_crsmc': ((BtintsmcOuterLoop, OuterLoopGains), (CrsmcInnerLoop, CrsmcInnerGains)),
-    'btintsmc_ntsmc': ((BtintsmcOuterLoop, OuterLoopGains), (NtsmcInnerLoop, NtsmcInnerGains)),
+    'dl_crsmc': ((loops.CrsmcOuterLoop, gains.CrsmcOuterGains), _CRSMC_INNER),
+    'dntsmc': ((loops.NtsmcOuterLoop, gains.NtsmcOuterGains), _NTSMC_INNER),
+    'btsmc_ntsmc': ((loops.BtsmcOuterLoop, gains.BtsmcOuterGains), _NTSMC_INNER),
+    'btintsmc_crsmc': (_BTINTSMC_OUTER, _CRSMC_INNER),
+    'btintsmc_ntsmc': (_BTINTSMC_OUTER, _NTSMC_INNER),
 }
 
 
-def _gains(cls, block, where: str):
-    """``cls(**block)`` with unknown names and wrong types reported by parameter name."""
+def _build_gains(cls, block, where: str):
+    """Return ``cls(**block)``, unknown names and wrong types reported by parameter name."""
     if block is None:
         block = {}
     if not isinstance(block, dict):
@@ -100,13 +94,15 @@ def _gains(cls, block, where: str):
 
 
 def _prefixed(name: str, exc: ParameterError) -> ParameterError:
+    """Return ``exc`` with its parameter name prefixed by the controller's."""
     return ParameterError(f'{name}.{exc.parameter}', exc.value, exc.rule, exc.unit)
 
 
 def gain_sections(name: str) -> dict:
     """
-    The gain dataclass of each section of controller ``name``'s block: ``{None: cls}``
-    for a single-loop law, ``{"outer": cls, "inner": cls}`` for a cascade.
+    Return the gain dataclass of each section of controller ``name``'s block.
+
+    ``{None: cls}`` for a single-loop law, ``{"outer": cls, "inner": cls}`` for a cascade.
     """
     if name in _SINGLE_LOOP:
         return {None: _SINGLE_LOOP[name][1]}
@@ -121,7 +117,7 @@ def gain_sections(name: str) -> dict:
 def build_controller(name: str, block: dict | None = None, limits: InputLimits | None = None,
                      dt: float = 0.001):
     """
-    The controller ``name`` with the gains of ``block`` (defaults for missing ones).
+    Build the controller ``name`` with the gains of ``block`` (defaults for missing ones).
 
     Parameters
     ----------
@@ -150,15 +146,15 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
     try:
         if None in sections:
             controller_cls = _SINGLE_LOOP[name][0]
-            return controller_cls(_gains(sections[None], block, name), limits, dt)
+            return controller_cls(_build_gains(sections[None], block, name), limits, dt)
         options = _DLSMC_OPTIONS if name in _DLSMC_NAMES else ()
         unknown = set(block) - set(sections) - set(options)
         if unknown:
             key = sorted(unknown)[0]
             known = ', '.join(sorted({*sections, *options}))
             raise ParameterError(f'{name}.{key}', block[key], f'unknown section; known: {known}')
-        outer = _gains(sections['outer'], block.get('outer'), 'outer')
-        inner = _gains(sections['inner'], block.get('inner'), 'inner')
+        outer = _build_gains(sections['outer'], block.get('outer'), 'outer')
+        inner = _build_gains(sections['inner'], block.get('inner'), 'inner')
         if name in _DLSMC_NAMES:
             return DlsmcController(DlsmcConfig(
                 outer=outer, inner=inner, limits=limits, dt=dt,
@@ -169,28 +165,3 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
         raise _prefixed(name, exc) from None
     (outer_cls, _), (inner_cls, _) = _CASCADES[name]
     return CascadeController(outer_cls(outer), inner_cls(inner), limits, dt, name=name)
-
-
-def load_gain_blocks(path: Path) -> dict:
-    """
-    The ``controllers:`` mapping of a comparison gains file: name -> gain block.
-
-    Raises
-    ------
-    ParameterError
-        For a missing file, bad YAML, or an unknown controller name.
-
-    """
-    path = Path(path)
-    try:
-        document = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ParameterError('gains file', str(path), f'cannot be read ({exc.strerror})') from None
-    except yaml.YAMLError as exc:
-        raise ParameterError('gains file', str(path), f'is not valid YAML ({exc})') from None
-    blocks = (document or {}).get('controllers') if isinstance(document, dict) else None
-    if not isinstance(blocks, dict):
-        raise ParameterError('gains file', str(path), "must have a 'controllers:' mapping")
-    for name in blocks:
-        gain_sections(name)
-    return blocks

@@ -16,11 +16,11 @@ from nfmr_dlsmc.baselines.path_frame import (
 )
 from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.gains import InputLimits
-from nfmr_dlsmc.core.saturation import saturate_inputs
+from nfmr_dlsmc.core.saturation import saturate_inputs, SaturatedController
 from nfmr_dlsmc.core.sliding_functions import sign
 
 
-class SingleLoopController:
+class SingleLoopController(SaturatedController):
     """
     Shared frame of a single-loop law: reference rates, saturation and telemetry.
 
@@ -37,16 +37,10 @@ class SingleLoopController:
     name = 'single_loop'
 
     def __init__(self, gains, limits: InputLimits | None = None, dt: float = 0.001):
+        super().__init__(limits, dt)
         self.gains = gains
-        self._limits = InputLimits() if limits is None else limits
-        self._dt = dt  # [s] default step length
         self.ref = ReferenceRates()
         self.reset()
-
-    @property
-    def period(self) -> float:
-        """The default step length [s] (the control period)."""
-        return self._dt
 
     def reset(self) -> None:
         """Start over: the next step is t = 0 of a new run."""
@@ -70,10 +64,12 @@ class SingleLoopController:
              ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
              yddot_d: float = 0.0) -> tuple[float, float]:
         """
-        One control period: pose of P [m, m, rad], reference position [m] and velocity
-        [m/s] -> saturated (v [m/s], omega [rad/s]); ``dt`` [s] since the previous step.
-        The reference acceleration (``xddot_d``, ``yddot_d``) is accepted for the common
-        interface; these laws use the backward-difference rates of ``self.ref``.
+        Run one control period: pose and reference -> saturated (v [m/s], omega [rad/s]).
+
+        The pose of P is in [m, m, rad], the reference position in [m] and its velocity in
+        [m/s]; ``dt`` [s] is the time since the previous step. The reference acceleration
+        (``xddot_d``, ``yddot_d``) is accepted for the common interface; these laws use the
+        backward-difference rates of ``self.ref``.
         """
         if dt is None:
             dt = self._dt
@@ -82,14 +78,15 @@ class SingleLoopController:
         v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
             v_raw, omega_raw, self._limits)
         self.x_e, self.y_e = x - x_d, y - y_d
-        self.theta_e = wrap_angle(theta - self.theta_d) if math.isfinite(self.theta_d) else math.nan
+        self.theta_e = (wrap_angle(theta - self.theta_d) if math.isfinite(self.theta_d)
+                        else math.nan)
         self.v_raw, self.omega_raw = v_raw, omega_raw
         self.v, self.omega = v, omega
         self._first = False
         return v, omega
 
     def telemetry(self) -> tuple:
-        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        """Return the internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
         return (self.x_e, self.y_e, self.theta_d, self.theta_e, self.s_x, self.s_y,
                 self.v_raw, self.omega_raw, self.v_saturated, self.omega_saturated)
 
@@ -128,8 +125,10 @@ class PidController(SingleLoopController):
 
 class CsmcController(SingleLoopController):
     """
-    Coupled sliding-mode tracking of Yang & Kim (IEEE Trans. Robot. Autom. 15(3), 1999),
-    the coupled single-loop SMC with three surface gains (paper ref. [15], "CSMC").
+    Coupled sliding-mode tracking of Yang & Kim (paper ref. [15], "CSMC").
+
+    The coupled single-loop SMC with three surface gains (IEEE Trans. Robot. Autom. 15(3),
+    1999).
 
     Surfaces on Kanayama's errors (the lateral one couples e2 and e3):
 

@@ -5,8 +5,8 @@ import json
 from pathlib import Path
 import sys
 
-from nfmr_dlsmc.bag.reader import BagError, read_bag
-from nfmr_dlsmc.cli.common import json_ready, OneLineParser, run_command
+from nfmr_dlsmc.bag.reader import read_bag
+from nfmr_dlsmc.cli.common import json_ready, OneLineParser, run_command, UsageError
 from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.ros.run_analysis import (
     JOINT_TOPIC,
@@ -19,14 +19,7 @@ from nfmr_dlsmc.ros.run_analysis import (
 )
 
 
-def _label(path: Path) -> str:
-    """A short column name: the run folder for ``<run>/bag``, else the bag's own name."""
-    path = Path(path)
-    name = path.stem if path.suffix == '.mcap' else path.name
-    return path.parent.name if name == 'bag' and path.parent.name else name
-
-
-def build_parser() -> argparse.ArgumentParser:
+def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog='nfmr-analyze',
         description='Metrics (IAE, ISE, STD, convergence time, ...) of rosbag2 MCAP bags that '
@@ -43,36 +36,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def analyze(paths, hold_from: float = HOLD_FROM) -> list[dict]:
-    """Read and measure each bag; warnings go to stderr. Raises BagError."""
-    results = []
-    for path in paths:
-        contents = read_bag(path, topics=[STATE_TOPIC, JOINT_TOPIC])
-        warning = contents.warning()
-        if warning:
-            print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
-        series = state_series(contents)
-        results.append({'path': str(path), 'label': _label(path), 'series': series,
-                        'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
-                        'truncated': contents.truncated})
-    return results
-
-
 def main(argv=None) -> int:
-    """Entry point of ``nfmr-analyze``; exit 2 with one line on an unreadable bag."""
-    return run_command('nfmr-analyze', _run, argv)
+    """Run ``nfmr-analyze``; return the exit status (2 with one line on an unreadable bag)."""
+    return run_command(_parser(), _run, argv)
 
 
-def _run(argv) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+def _run(args) -> int:
     if not args.hold_from >= 0.0:
-        parser.error(f'--hold-from must be >= 0, got {args.hold_from}')
-    try:
-        results = analyze(args.bags, args.hold_from)
-    except BagError as exc:
-        print(f'nfmr-analyze: error: {exc}', file=sys.stderr)
-        return 2
+        raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
+    results = [_measure(path, args.hold_from) for path in args.bags]
     if args.plots:
         paths = plot_runs([(r['label'], r['series']) for r in results], args.plots)
         print(f"plots: {', '.join(str(p) for p in paths)}", file=sys.stderr)
@@ -83,6 +55,32 @@ def _run(argv) -> int:
     else:
         print(metrics_table([(r['label'], r['metrics']) for r in results]))
     return 0
+
+
+def _measure(path: Path, hold_from: float) -> dict:
+    """
+    Read and measure one bag; a truncated bag's warning goes to stderr.
+
+    Raises
+    ------
+    BagError
+        The bag cannot be read or has no controller state.
+
+    """
+    contents = read_bag(path, topics=[STATE_TOPIC, JOINT_TOPIC])
+    warning = contents.warning()
+    if warning:
+        print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
+    series = state_series(contents)
+    return {'path': str(path), 'label': _label(path), 'series': series,
+            'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
+            'truncated': contents.truncated}
+
+
+def _label(path: Path) -> str:
+    """Return a short column name: the run folder for ``<run>/bag``, else the bag's own name."""
+    name = path.stem if path.suffix == '.mcap' else path.name
+    return path.parent.name if name == 'bag' and path.parent.name else name
 
 
 if __name__ == '__main__':

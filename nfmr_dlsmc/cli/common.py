@@ -1,6 +1,11 @@
 """
-What every command line shares: one-line errors, strict JSON, a quiet end on a closed
-stdout or Ctrl-C, and output paths checked before the long work starts.
+What every command line shares: the one ``main`` wrapper, argument types and checks.
+
+:func:`run_command` runs each ``nfmr-*`` command. A user error, a bad argument included
+(:class:`UsageError`), is an :class:`~nfmr_dlsmc.core.errors.NfmrError`: it ends there as
+one line ``<prog>: error: <message>`` and exit status 2. A closed stdout ends the command
+quietly, Ctrl-C and SIGTERM with one line and exit status 130. Also strict JSON and output
+paths checked before the long work starts.
 """
 
 import argparse
@@ -13,13 +18,67 @@ import tempfile
 
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.runtime.share import shipped_config
+from nfmr_dlsmc.runtime.user_errors import report_user_error
+
+#: Exit status of a command ended by Ctrl-C or SIGTERM (128 + SIGINT, as a shell reports).
+INTERRUPTED_STATUS = 130
+#: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
+#: measured; rounded up) [bytes].
+RECORDED_STEP_BYTES = 1024
+#: Memory one robot of the vectorised batch simulator takes (its ~30 state and metric
+#: arrays of float64, twice for temporaries) [bytes].
+BATCH_ROBOT_BYTES = 512
+
+
+class UsageError(NfmrError):
+    """A command line the command refuses: a bad argument, an output it cannot write."""
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a bad argument in one line and exits 2."""
+    """An argparse parser whose errors are :class:`UsageError`, reported by run_command."""
 
     def error(self, message):
-        self.exit(2, f'{self.prog}: error: {message}\n')
+        """Raise the argument error as a :class:`UsageError`."""
+        raise UsageError(message)
+
+
+def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
+    """
+    Run one command: ``body(args)`` on ``argv`` parsed by ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command line (a :class:`OneLineParser`); its ``prog`` names the command in
+        every line printed here.
+    body : callable
+        ``body(args) -> int``, the command itself.
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        ``body``'s exit status; 2 after a user error (one line), 0 on a closed stdout
+        (``| head``), 130 on Ctrl-C or SIGTERM (one line).
+
+    """
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return body(parser.parse_args(argv))
+    except BrokenPipeError:
+        # Python flushes stdout again at exit: point it at /dev/null first.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        print(f'\n{parser.prog}: interrupted', file=sys.stderr)
+        return INTERRUPTED_STATUS
+    except NfmrError as exc:
+        return report_user_error(parser.prog, exc)
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def positive_number(text: str) -> float:
@@ -42,10 +101,56 @@ def _number(text: str, rule, rule_text: str) -> float:
     return value
 
 
+def positive_integer(text: str) -> int:
+    """Argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be >= 1, got {text!r}')
+    return value
+
+
+def number_triple(names: str, non_negative: bool = False):
+    """
+    Return an argparse type: three comma-separated finite numbers.
+
+    Parameters
+    ----------
+    names : str
+        What the three are, for the message (e.g. ``'x,y,theta [m,m,rad]'``).
+    non_negative : bool
+        Whether each must be >= 0.
+
+    Returns
+    -------
+    callable
+        ``text -> (float, float, float)``.
+
+    """
+    floor = 0.0 if non_negative else -math.inf
+    rule = ' >= 0' if non_negative else ''
+
+    def triple(text: str) -> tuple[float, float, float]:
+        try:
+            values = tuple(float(part) for part in text.split(','))
+        except ValueError:
+            values = ()
+        if len(values) != 3 or not all(math.isfinite(v) and v >= floor for v in values):
+            raise argparse.ArgumentTypeError(
+                f'expected three finite numbers{rule} {names}, got {text!r}')
+        return values
+
+    return triple
+
+
 def json_ready(value):
     """
-    Non-finite floats as null (JSON has no NaN or Infinity), through dicts, lists and
-    tuples; finite ones keep their shortest round-trip form.
+    Return ``value`` with its non-finite floats as None (JSON has no NaN or Infinity).
+
+    Dicts, lists and tuples are converted throughout; finite floats keep their shortest
+    round-trip form.
     """
     if isinstance(value, float):
         return value if math.isfinite(value) else None
@@ -56,78 +161,94 @@ def json_ready(value):
     return value
 
 
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt
-
-
-def run_command(prog: str, body, argv=None) -> int:
+def check_writable(path: Path, option: str, directory: bool = False) -> None:
     """
-    ``body(argv)`` -> exit code, ending quietly on a closed stdout (``| head``: 0) and on
-    Ctrl-C or SIGTERM (one line, 130).
-    """
-    signal.signal(signal.SIGTERM, _interrupt)
-    try:
-        return body(argv)
-    except BrokenPipeError:
-        # Python flushes stdout again at exit: point it at /dev/null first.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
-    except KeyboardInterrupt:
-        print(f'\n{prog}: interrupted', file=sys.stderr)
-        return 130
-    except NfmrError as exc:
-        print(f'{prog}: error: {exc}', file=sys.stderr)
-        return 2
+    Refuse, before any work, an output that cannot be written.
 
+    Creates the directory (``directory``: ``path`` itself, else its parent) and a scratch
+    file in it, as the permission bits alone do not tell (root ignores them, /proc refuses
+    anyway).
 
-def check_writable(parser: argparse.ArgumentParser, path: Path, option: str,
-                   directory: bool = False) -> None:
-    """
-    Refuse, before any work, an output that cannot be written: create the directory
-    (``directory``: ``path`` itself, else its parent) and a scratch file in it, as the
-    permission bits alone do not tell (root ignores them, /proc refuses anyway).
+    Raises
+    ------
+    UsageError
+        ``path`` cannot be written; the message names ``option``.
+
     """
     path = Path(path)
     if not directory and path.is_dir():
-        parser.error(f'{option} {path}: is a directory, expected a file')
+        raise UsageError(f'{option} {path}: is a directory, expected a file')
     folder = path if directory else path.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):
             pass
     except OSError as exc:
-        parser.error(f'{option} {path}: not writable ({exc.strerror or exc})')
+        raise UsageError(f'{option} {path}: not writable ({exc.strerror or exc})') from None
 
 
-def check_not_shipped(parser: argparse.ArgumentParser, path: Path, option: str,
-                      force: bool) -> None:
+def add_output_file(parser: argparse.ArgumentParser, name: str, what: str) -> None:
     """
-    Refuse to write over a parameter file shipped with the package (``config/``, in the
-    source tree or installed) unless ``force`` (``--force``) says so.
+    Add ``--out`` (default ``name`` here) and ``--force`` to write over a shipped file.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command line to add them to.
+    name : str
+        The file's default name, also that of the file shipped in ``config/``.
+    what : str
+        What the file is, for the help (e.g. ``'parameter file'``).
+
+    """
+    parser.add_argument('--out', type=Path, default=Path(name),
+                        help=f'{what} to write (default {name} here; the shipped '
+                             f'config/{name} only with --force)')
+    parser.add_argument('--force', action='store_true',
+                        help=f'allow --out to replace a {what} shipped with nfmr')
+
+
+def check_output_file(path: Path, force: bool) -> None:
+    """
+    Refuse, before any work, an ``--out`` file that cannot or may not be written.
+
+    A file shipped with the package (``config/`` of the source tree or of the install) is
+    replaced only with ``force`` (``--force``).
+
+    Raises
+    ------
+    UsageError
+        ``path`` is a shipped file and ``force`` is false, or it cannot be written.
+
     """
     shipped = shipped_config(Path(path).name)
     if not force and Path(path).resolve() == shipped.resolve() and shipped.exists():
-        parser.error(f'{option} {path} is a file shipped with nfmr; write elsewhere or add '
-                     '--force to replace it')
+        raise UsageError(f'--out {path} is a file shipped with nfmr; write elsewhere or '
+                         'add --force to replace it')
+    check_writable(path, '--out')
 
 
-#: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
-#: measured; rounded up) [bytes].
-RECORDED_STEP_BYTES = 1024
-#: Memory one robot of the vectorised batch simulator takes (its ~30 state and metric
-#: arrays of float64, twice for temporaries) [bytes].
-BATCH_ROBOT_BYTES = 512
-
-
-def check_memory(parser: argparse.ArgumentParser, needed: float, what: str) -> None:
+def check_memory(needed: float, what: str) -> None:
     """
-    Refuse, before any work, a request that needs more memory than is available:
-    ``needed`` [bytes] for ``what`` (named in the message, e.g. "--duration 1e9 s").
+    Refuse, before any work, a request that needs more memory than is available.
+
+    Parameters
+    ----------
+    needed : float
+        Memory the request takes [bytes].
+    what : str
+        The request, named in the message (e.g. "--duration 1e9 s").
+
+    Raises
+    ------
+    UsageError
+        More than the available memory is needed.
+
     """
     try:
         available = os.sysconf('SC_AVPHYS_PAGES') * os.sysconf('SC_PAGE_SIZE')
     except (ValueError, OSError):
         return
     if needed > available:
-        parser.error(f'{what} needs about {needed / 2**30:.3g} GiB of memory; '
-                     f'{available / 2**30:.3g} GiB are available')
+        raise UsageError(f'{what} needs about {needed / 2**30:.3g} GiB of memory; '
+                         f'{available / 2**30:.3g} GiB are available')

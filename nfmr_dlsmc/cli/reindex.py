@@ -4,13 +4,11 @@ import argparse
 from pathlib import Path
 import sys
 
-from nfmr_dlsmc.bag.reader import BagError
 from nfmr_dlsmc.bag.reindex import reindex
 from nfmr_dlsmc.cli.common import OneLineParser, run_command
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``nfmr-reindex`` command line."""
+def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog='nfmr-reindex',
         description='Rebuild rosbag2 MCAP bags cut by a killed recorder (no summary, no '
@@ -23,18 +21,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    """Entry point of ``nfmr-reindex``; one line per bag, exit 2 on the first unusable one."""
-    return run_command('nfmr-reindex', _run, argv)
+    """Run ``nfmr-reindex``: one line per bag, exit status 2 at the first unusable one."""
+    return run_command(_parser(), _run, argv)
 
 
-def _run(argv) -> int:
-    args = build_parser().parse_args(argv)
+def _run(args) -> int:
     for path in args.bags:
-        try:
-            result = reindex(path)
-        except BagError as exc:
-            print(f'nfmr-reindex: error: {exc}', file=sys.stderr)
-            return 2
+        result = reindex(path)
         if result.rebuilt:
             print(f'{result.bag}: rebuilt with {result.messages} messages on {result.topics} '
                   f'topics; {result.lost_bytes} bytes of the cut last chunk lost; original '

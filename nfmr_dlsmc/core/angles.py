@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 
+__all__ = ['wrap_angle', 'wrap_angles', 'yaw_from_quaternion']
+
 _TWO_PI = 2.0 * math.pi
 
 
@@ -35,7 +37,7 @@ def wrap_angles(angles: np.ndarray) -> np.ndarray:
 
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
     """
-    Yaw [rad] of the rotation a quaternion describes, or NaN if it describes none.
+    Return the yaw [rad] of the rotation a quaternion describes, or NaN if it describes none.
 
     yaw = atan2(2 (w z + x y), w^2 + x^2 - y^2 - z^2), which does not depend on the
     quaternion's norm, so a non-unit quaternion is read as its normalised self; a zero

@@ -3,11 +3,14 @@
 import math
 
 from nfmr_dlsmc.core.gains import InputLimits
+from nfmr_dlsmc.core.saturation import SaturatedController
+
+__all__ = ['CascadeController']
 
 _TWO_PI = 2.0 * math.pi
 
 
-class CascadeController:
+class CascadeController(SaturatedController):
     """
     Position loop -> (v, theta_d) -> attitude loop -> omega, for one robot.
 
@@ -50,26 +53,19 @@ class CascadeController:
     TELEMETRY_FIELDS = ('x_e', 'y_e', 'theta_d', 'thetadot_d', 'theta_e', 's_x', 's_y',
                         'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated')
 
-    __slots__ = ('name', '_limits', '_dt', '_filter_tau', '_analytic', 'outer', 'inner',
-                 '_has_previous',
+    __slots__ = ('name', '_filter_tau', '_analytic', 'outer', 'inner', '_has_previous',
                  'x_e', 'y_e', 'theta_d', 'thetadot_d', 's_theta', 'v_raw', 'omega_raw',
                  'v_saturated', 'omega_saturated')
 
     def __init__(self, outer, inner, limits: InputLimits | None = None, dt: float = 0.001,
                  filter_tau: float = 0.0, name: str = 'cascade', analytic_rate: bool = False):
+        super().__init__(limits, dt)
         self.name = name
         self._analytic = analytic_rate
         self.outer = outer
         self.inner = inner
-        self._limits = InputLimits() if limits is None else limits
-        self._dt = dt  # [s] default step length
         self._filter_tau = filter_tau  # [s]
         self.reset()
-
-    @property
-    def period(self) -> float:
-        """The default step length [s] (the control period)."""
-        return self._dt
 
     def reset(self) -> None:
         """Start over: the next step is t = 0 of a new run."""
@@ -85,7 +81,7 @@ class CascadeController:
              ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
              yddot_d: float = 0.0) -> tuple[float, float]:
         """
-        One control period.
+        Run one control period.
 
         Parameters
         ----------
@@ -145,7 +141,7 @@ class CascadeController:
         return v, omega
 
     def telemetry(self) -> tuple:
-        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        """Return the internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
         return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
                 self.outer.s_x, self.outer.s_y, self.v_raw, self.omega_raw,
                 self.v_saturated, self.omega_saturated)

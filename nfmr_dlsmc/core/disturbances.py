@@ -5,6 +5,8 @@ from dataclasses import dataclass
 from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
 import numpy as np
 
+__all__ = ['YawRateDisturbance', 'YawRatePulse', 'disturbance_by_name', 'paper_disturbance']
+
 
 @dataclass(frozen=True)
 class YawRatePulse:
@@ -33,7 +35,7 @@ class YawRatePulse:
 
     @property
     def end(self) -> float:
-        """End of the pulse [s] (excluded)."""
+        """Return the end of the pulse [s] (excluded)."""
         return self.start + self.duration
 
 
@@ -44,11 +46,11 @@ class YawRateDisturbance:
     pulses: tuple[YawRatePulse, ...] = ()
 
     def value(self, t: float) -> float:
-        """varpi(t) [rad/s] at one time [s]."""
+        """Return varpi(t) [rad/s] at one time [s]."""
         return sum(p.magnitude for p in self.pulses if p.start <= t < p.end)
 
     def sample(self, t: np.ndarray) -> np.ndarray:
-        """Varpi at an array of times [s] -> [rad/s]."""
+        """Return varpi [rad/s] at an array of times [s]."""
         t = np.asarray(t, dtype=float)
         out = np.zeros_like(t)
         for p in self.pulses:
@@ -57,13 +59,13 @@ class YawRateDisturbance:
 
 
 def paper_disturbance(magnitude: float = 0.5, duration: float = 0.5) -> YawRateDisturbance:
-    """The Case 2 profile: pulses of ``magnitude`` [rad/s] at 5 s and 50 s for ``duration`` [s]."""
+    """Return the Case 2 profile: ``magnitude`` [rad/s] at 5 s and 50 s for ``duration`` [s]."""
     return YawRateDisturbance((YawRatePulse(5.0, duration, magnitude),
                                YawRatePulse(50.0, duration, magnitude)))
 
 
 def disturbance_by_name(name: str) -> YawRateDisturbance:
-    """``'none'`` -> no disturbance, ``'paper'`` -> :func:`paper_disturbance`."""
+    """Return the disturbance of a name: ``'none'``, or ``'paper'`` (:func:`paper_disturbance`)."""
     if name == 'none':
         return YawRateDisturbance()
     if name == 'paper':

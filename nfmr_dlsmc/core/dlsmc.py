@@ -5,12 +5,16 @@ from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop
 from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
 
+__all__ = ['DlsmcController']
+
 
 class DlsmcController(CascadeController):
     """
-    The DLSMC: the :class:`~nfmr_dlsmc.core.cascade.CascadeController` of Fig. 2 with the
-    BTINTSMC position loop (eqs 32-35) and the ABFSMC attitude loop (eqs 10-13), stepped
-    once per control period ``config.dt``.
+    The DLSMC: the cascade of Fig. 2 with the BTINTSMC and the ABFSMC.
+
+    The :class:`~nfmr_dlsmc.core.cascade.CascadeController` with the BTINTSMC position loop
+    (eqs 32-35) and the ABFSMC attitude loop (eqs 10-13), stepped once per control period
+    ``config.dt``.
 
     Attributes (after a step): those of the cascade, and
     ``outer``, ``inner`` : BtintsmcOuterLoop, AbfsmcInnerLoop with their own step
@@ -26,17 +30,17 @@ class DlsmcController(CascadeController):
 
     def __init__(self, config: DlsmcConfig | None = None):
         config = DlsmcConfig() if config is None else config
-        super().__init__(BtintsmcOuterLoop(config.outer),
-                         AbfsmcInnerLoop(config.inner, config.limits.omega_max),
-                         config.limits, config.dt, config.thetadot_filter, 'dlsmc',
-                         config.thetadot_source == 'analytic')
+        super().__init__(BtintsmcOuterLoop(config.outer), AbfsmcInnerLoop(config.inner),
+                         name='dlsmc')
         self.config = config
 
     @property
     def config(self) -> DlsmcConfig:
         """
-        The configuration in use; assigning a new one takes effect at the next step
-        and keeps the loops' state (integrals, e(0), adaptive phase).
+        Return the configuration in use.
+
+        Assigning a new one takes effect at the next step and keeps the loops' state
+        (integrals, e(0), adaptive phase).
         """
         return self._config
 
@@ -52,7 +56,7 @@ class DlsmcController(CascadeController):
         self.inner.omega_max = config.limits.omega_max
 
     def telemetry(self) -> tuple:
-        """The internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
+        """Return the internal signals of the last step, named by ``TELEMETRY_FIELDS``."""
         return (self.x_e, self.y_e, self.theta_d, self.thetadot_d, self.s_theta,
                 self.outer.s_x, self.outer.s_y, self.inner.eta_hat, self.inner.phase,
                 self.v_raw, self.omega_raw, self.v_saturated, self.omega_saturated)

@@ -1,82 +1,79 @@
 """
 Frozen, validated gain sets of the DLSMC (paper section 4.1 defaults).
 
-Each dataclass validates itself on construction and raises
-:class:`~nfmr_dlsmc.core.validation.ParameterError` naming the parameter (with its YAML /
-ROS parameter prefix, e.g. ``outer.C1``), the value and the rule. The same classes guard
-parameter files and live parameter changes.
+Each parameter is declared once, with its unit, description and rule
+(:mod:`nfmr_dlsmc.core.schema`); each dataclass validates itself on construction and
+raises :class:`~nfmr_dlsmc.core.validation.ParameterError` naming the parameter (with its
+YAML / ROS parameter prefix, e.g. ``outer.C1``), the value and the rule. The same classes
+guard parameter files and live parameter changes.
 """
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 import math
 from typing import ClassVar
 
-from nfmr_dlsmc.core.validation import (
-    check_exponent_pair,
-    check_finite,
-    check_greater,
-    check_non_negative,
-    check_positive,
-    ParameterError,
+from nfmr_dlsmc.core.schema import (
+    check_fields,
+    documented,
+    FINITE,
+    FLAG,
+    greater,
+    NON_NEGATIVE,
+    ODD_INTEGER,
+    one_of,
+    param,
+    POSITIVE,
+    positive_up_to,
 )
+from nfmr_dlsmc.core.validation import check_exponent_pair, ParameterError
 import numpy as np
 
+__all__ = ['DlsmcConfig', 'InnerLoopGains', 'InputLimits', 'OuterLoopGains', 'RATIO_FLOOR',
+           'adapted_rates']
 
+
+@documented
 @dataclass(frozen=True)
 class OuterLoopGains:
     """
     Gains of the BTINTSMC position loop, eqs (32)-(35).
 
-    Attributes
-    ----------
-    C1, C2 : float
-        Bounded-rate coefficients of the x and y axes [m/s] (eqs 34, 35).
-    k2 : float
-        Reaching gain [m^(1 - q3/p3)/s] of the terminal term (eqs 34, 35).
-    h : float
-        Slope of erf in the reaching term [1/m] (doc/design.md, D4: h = 1).
-    xi : float
-        Boundary between the full-speed and the stable-tracking phase [m] (eq. 33).
-    p2, q2 : int
-        Odd exponents of alpha, eq. (33); 1 < p2/q2 < 2.
-    p3, q3 : int
-        Odd exponents of the reaching term, eqs (34), (35); 1 < p3/q3 < 2.
-    adaptive_ratio : bool
-        The paper's future-work item 1 (off by default): at t = 0 the two rates are
-        re-proportioned to the initial error, keeping their norm sqrt(C1^2 + C2^2):
-        C_i = max(norm |e_i(0)| / |e(0)|, RATIO_FLOOR norm), so that during the full-speed
-        phase the robot heads straight for the reference point (Fig. 13: the ratio sets
-        the direction of the return). See :func:`adapted_rates`.
-
+    ``adaptive_ratio`` is the paper's future-work item 1 (off by default): at t = 0 the two
+    rates are re-proportioned to the initial error, keeping their norm sqrt(C1^2 + C2^2):
+    C_i = max(norm |e_i(0)| / |e(0)|, RATIO_FLOOR norm), so that during the full-speed
+    phase the robot heads straight for the reference point (Fig. 13: the ratio sets the
+    direction of the return). See :func:`adapted_rates`. ``linear_zone`` is a robot-profile
+    option (doc/design.md, D8), 0 (the paper's alpha) by default.
     """
 
     prefix: ClassVar[str] = 'outer'
 
-    C1: float = 0.6
-    C2: float = 0.6
-    k2: float = 1.0
-    h: float = 1.0
-    xi: float = 0.5
-    p2: int = 33
-    q2: int = 17
-    p3: int = 33
-    q3: int = 17
-    adaptive_ratio: bool = False
-    linear_zone: float = 0.0
+    C1: float = param(0.6, 'm/s', 'bounded rate of the x axis, eq. (34)', POSITIVE)
+    C2: float = param(0.6, 'm/s', 'bounded rate of the y axis, eq. (35)', POSITIVE)
+    k2: float = param(1.0, 'm^(1 - q3/p3)/s',
+                      'reaching gain of the terminal term, eqs (34), (35)', POSITIVE)
+    h: float = param(1.0, '1/m', 'slope of erf in the reaching term, eqs (34), (35) '
+                     '(doc/design.md, D4: h = 1)', POSITIVE)
+    xi: float = param(0.5, 'm', 'boundary between the full-speed and the stable-tracking '
+                      'phase, eq. (33)', POSITIVE)
+    p2: int = param(33, '', 'odd exponent of alpha, eq. (33)', ODD_INTEGER,
+                    also='1 < p2/q2 < 2')
+    q2: int = param(17, '', 'odd exponent of alpha, eq. (33)', ODD_INTEGER)
+    p3: int = param(33, '', 'odd exponent of the reaching term, eqs (34), (35)', ODD_INTEGER,
+                    also='1 < p3/q3 < 2')
+    q3: int = param(17, '', 'odd exponent of the reaching term, eqs (34), (35)', ODD_INTEGER)
+    adaptive_ratio: bool = param(False, '', 're-proportion C1:C2 to the initial error, '
+                                 'keeping their norm (paper future work 1)', FLAG)
+    linear_zone: float = param(0.0, 'm', 'half-width d of a linear segment of alpha(e) '
+                               "around 0 (robot profile; 0: the paper's alpha)",
+                               NON_NEGATIVE, also='< outer.xi')
 
     def __post_init__(self):
+        check_fields(self)
         n = self.prefix
-        if not isinstance(self.adaptive_ratio, bool):
-            raise ParameterError(f'{n}.adaptive_ratio', self.adaptive_ratio, 'must be true or false')
-        check_positive(f'{n}.C1', self.C1, 'm/s')
-        check_positive(f'{n}.C2', self.C2, 'm/s')
-        check_positive(f'{n}.k2', self.k2)
-        check_positive(f'{n}.h', self.h, '1/m')
-        check_positive(f'{n}.xi', self.xi, 'm')
         check_exponent_pair(f'{n}.p2', self.p2, f'{n}.q2', self.q2)
         check_exponent_pair(f'{n}.p3', self.p3, f'{n}.q3', self.q3)
-        zone = check_non_negative(f'{n}.linear_zone', self.linear_zone, 'm')
-        if zone >= self.xi:
+        if self.linear_zone >= self.xi:
             raise ParameterError(f'{n}.linear_zone', self.linear_zone,
                                  f'must be < {n}.xi = {self.xi:g} m', 'm')
 
@@ -87,7 +84,7 @@ RATIO_FLOOR = 0.1
 
 def adapted_rates(C1, C2, x_e0, y_e0):
     """
-    Rates proportioned to the initial error (``OuterLoopGains.adaptive_ratio``).
+    Return the rates proportioned to the initial error (``OuterLoopGains.adaptive_ratio``).
 
     C_i = max(c |e_i(0)| / |e(0)|, RATIO_FLOOR c) with c = sqrt(C1^2 + C2^2) [m/s]; works
     element-wise on numpy arrays. With e(0) = 0 the rates are kept.
@@ -110,130 +107,95 @@ def adapted_rates(C1, C2, x_e0, y_e0):
     return max(norm * abs(x_e0) / e_norm, floor), max(norm * abs(y_e0) / e_norm, floor)
 
 
+@documented
 @dataclass(frozen=True)
 class InnerLoopGains:
     """
     Gains of the ABFSMC attitude loop, eqs (11)-(13).
 
-    Attributes
-    ----------
-    k1 : float
-        Terminal reaching gain [rad^(1 - q1/p1)/s] (eq. 11).
-    p1, q1 : int
-        Odd exponents of the reaching term; 1 < p1/q1 < 2.
-    L0 : float
-        Constant adaptation rate of eta_hat before t_bar [rad/s^2] (eq. 12), > 0.
-    L1 : float
-        Error-proportional adaptation rate [1/s^2] (eq. 12), > 1 as Theorem 1 requires.
-    lam : float
-        Barrier-function coefficient lambda [rad/s] (eq. 13), > 0.
-    eps : float
-        Barrier half-width epsilon [rad] (eq. 13), in (0, pi).
-    anti_windup : bool
-        Hold the integral of eq. (12) while omega is saturated (not in the paper; off by
-        default). See :class:`~nfmr_dlsmc.core.inner_loop.AbfsmcInnerLoop`.
-    boundary_layer : float
-        Robot profile (0, the paper's sign(s), by default): width phi [rad] of a boundary
-        layer that replaces sign(s_theta) in the eta_hat term of eq. (11) by
-        sat(s_theta / phi).
-    eta_max : float
-        Robot profile (0, no cap as in the paper, by default): upper bound [rad/s] of the
-        integral phase of eta_hat, eq. (12), whose integral stops at it; the barrier phase,
-        eq. (13), is not capped.
-
+    ``anti_windup`` is not in the paper (off by default); see
+    :class:`~nfmr_dlsmc.core.inner_loop.AbfsmcInnerLoop`. ``boundary_layer`` and
+    ``eta_max`` are robot-profile options (doc/design.md, D8), 0 (the paper's law) by
+    default: the first replaces sign(s_theta) in the eta_hat term of eq. (11) by
+    sat(s_theta / phi); the second stops the integral phase of eta_hat, eq. (12), at the
+    cap, while the barrier phase, eq. (13), is not capped.
     """
 
     prefix: ClassVar[str] = 'inner'
 
-    k1: float = 1.0
-    p1: int = 33
-    q1: int = 23
-    L0: float = 1.0
-    L1: float = 1.2
-    lam: float = 1.0
-    eps: float = 0.01
-    anti_windup: bool = False
-    boundary_layer: float = 0.0
-    eta_max: float = 0.0
+    k1: float = param(1.0, 'rad^(1 - q1/p1)/s', 'terminal reaching gain, eq. (11)', POSITIVE)
+    p1: int = param(33, '', 'odd exponent of the reaching term, eq. (11)', ODD_INTEGER,
+                    also='1 < p1/q1 < 2')
+    q1: int = param(23, '', 'odd exponent of the reaching term, eq. (11)', ODD_INTEGER)
+    L0: float = param(1.0, 'rad/s^2', 'constant adaptation rate of eta_hat before t_bar, '
+                      'eq. (12)', POSITIVE)
+    L1: float = param(1.2, '1/s^2', 'error-proportional adaptation rate, eq. (12) (its '
+                      'bound is the one Theorem 1 requires)', greater(1.0))
+    lam: float = param(1.0, 'rad/s', 'barrier-function coefficient lambda, eq. (13)',
+                       POSITIVE)
+    eps: float = param(0.01, 'rad', 'barrier half-width epsilon, eq. (13)',
+                       positive_up_to(math.pi, 'pi', inclusive=False))
+    anti_windup: bool = param(False, '', 'hold the integral of eq. (12) while omega is '
+                              'saturated (not in the paper)', FLAG)
+    boundary_layer: float = param(0.0, 'rad', 'width phi of sat(s/phi) replacing sign(s) '
+                                  'in the eta_hat term, eq. (11) (robot profile; 0: the '
+                                  "paper's sign)", NON_NEGATIVE)
+    eta_max: float = param(0.0, 'rad/s', 'cap on the integral phase of eta_hat, eq. (12) '
+                           '(robot profile; 0: no cap, the paper)', NON_NEGATIVE)
 
     def __post_init__(self):
+        check_fields(self)
         n = self.prefix
-        check_positive(f'{n}.k1', self.k1)
         check_exponent_pair(f'{n}.p1', self.p1, f'{n}.q1', self.q1)
-        check_positive(f'{n}.L0', self.L0, 'rad/s^2')
-        check_greater(f'{n}.L1', self.L1, 1.0, '1/s^2')
-        check_positive(f'{n}.lam', self.lam, 'rad/s')
-        eps = check_positive(f'{n}.eps', self.eps, 'rad')
-        if eps >= math.pi:
-            raise ParameterError(f'{n}.eps', self.eps, 'must be < pi', 'rad')
-        if not isinstance(self.anti_windup, bool):
-            raise ParameterError(f'{n}.anti_windup', self.anti_windup, 'must be true or false')
-        check_non_negative(f'{n}.boundary_layer', self.boundary_layer, 'rad')
-        check_non_negative(f'{n}.eta_max', self.eta_max, 'rad/s')
 
 
+@documented
 @dataclass(frozen=True)
 class InputLimits:
-    """Input saturation: 0 < v_min <= v <= v_max [m/s], |omega| <= omega_max [rad/s]."""
+    """Input saturation of both loops: v_min <= v <= v_max, |omega| <= omega_max."""
 
     prefix: ClassVar[str] = 'limits'
 
-    v_min: float = 0.2
-    v_max: float = 2.0
-    omega_max: float = 1.59
+    v_min: float = param(0.2, 'm/s', 'least linear speed', POSITIVE)
+    v_max: float = param(2.0, 'm/s', 'largest linear speed', FINITE, also='> limits.v_min')
+    omega_max: float = param(1.59, 'rad/s', 'largest |yaw rate|', POSITIVE)
 
     def __post_init__(self):
+        check_fields(self)
         n = self.prefix
-        v_min = check_positive(f'{n}.v_min', self.v_min, 'm/s')
-        v_max = check_finite(f'{n}.v_max', self.v_max, 'm/s')
-        if v_max <= v_min:
+        if self.v_max <= self.v_min:
             raise ParameterError(f'{n}.v_max', self.v_max,
-                                 f'must be > {n}.v_min = {v_min:g} m/s', 'm/s')
-        check_positive(f'{n}.omega_max', self.omega_max, 'rad/s')
+                                 f'must be > {n}.v_min = {self.v_min:g} m/s', 'm/s')
 
 
-#: How thetadot_d is obtained (``DlsmcConfig.thetadot_source``).
-THETADOT_SOURCES = ('difference', 'analytic')
-
-
+@documented
 @dataclass(frozen=True)
 class DlsmcConfig:
     """
     Everything the DLSMC cascade needs: both loops, the limits and the period.
 
-    Attributes
-    ----------
-    outer : OuterLoopGains
-    inner : InnerLoopGains
-    limits : InputLimits
-    dt : float
-        Control period [s] (paper: 1 ms).
-    thetadot_filter : float
-        Time constant [s] of a first-order low-pass on the backward-difference thetadot_d;
-        0 (default) uses the raw difference as the paper does (doc/design.md, D5).
-    thetadot_source : str
-        ``difference`` (default, the paper): thetadot_d is the backward difference of the
-        wrapped theta_d over the step. ``analytic`` (robot profile): thetadot_d is the time
-        derivative of theta_d = atan2(u_y, u_x) computed from the outer law and the
-        kinematic model's error rate (see
-        :meth:`~nfmr_dlsmc.core.outer_loop.BtintsmcOuterLoop.input_rate`); needs
-        ``thetadot_filter`` = 0.
-
+    ``outer``, ``inner`` and ``limits`` hold the gains of the two loops and the input
+    limits. ``thetadot_source`` ``difference`` (the paper) takes thetadot_d as the backward
+    difference of the wrapped theta_d over the step, optionally low-pass filtered
+    (``thetadot_filter``); ``analytic`` (robot profile) as the time derivative of
+    theta_d = atan2(u_y, u_x) computed from the outer law and the kinematic model's error
+    rate (see :meth:`~nfmr_dlsmc.core.outer_loop.BtintsmcOuterLoop.input_rate`;
+    doc/design.md, D5).
     """
 
     outer: OuterLoopGains = field(default_factory=OuterLoopGains)
     inner: InnerLoopGains = field(default_factory=InnerLoopGains)
     limits: InputLimits = field(default_factory=InputLimits)
-    dt: float = 0.001
-    thetadot_filter: float = 0.0
-    thetadot_source: str = 'difference'
+    dt: float = param(0.001, 's', 'control period (paper: 1 ms)', POSITIVE, read_only=True)
+    thetadot_filter: float = param(0.0, 's', 'time constant of a first-order low-pass on '
+                                   'the backward-difference thetadot_d (0: none, the paper)',
+                                   NON_NEGATIVE, also='0 with thetadot_source analytic')
+    thetadot_source: str = param('difference', '', 'difference: backward difference of '
+                                 'theta_d (paper); analytic: derivative of eq. (40) along '
+                                 'the model (robot profile)', one_of('difference', 'analytic'))
 
     def __post_init__(self):
-        check_positive('dt', self.dt, 's')
-        check_non_negative('thetadot_filter', self.thetadot_filter, 's')
-        if self.thetadot_source not in THETADOT_SOURCES:
-            raise ParameterError('thetadot_source', self.thetadot_source,
-                                 f"must be one of {', '.join(THETADOT_SOURCES)}")
+        check_fields(self)
         if self.thetadot_source == 'analytic' and self.thetadot_filter != 0.0:
             raise ParameterError('thetadot_filter', self.thetadot_filter,
                                  'must be 0 with thetadot_source = analytic (the analytic '
@@ -241,11 +203,6 @@ class DlsmcConfig:
 
     @property
     def is_paper_law(self) -> bool:
-        """True when every robot-profile option is off (the paper's equations)."""
+        """Tell whether every robot-profile option is off (the paper's equations)."""
         return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
                 and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference')
-
-
-def gain_names(cls) -> list[str]:
-    """The dotted parameter names of a gain dataclass, e.g. ``['outer.C1', ...]``."""
-    return [f'{cls.prefix}.{f.name}' for f in fields(cls)]

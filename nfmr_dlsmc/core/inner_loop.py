@@ -5,6 +5,8 @@ import math
 from nfmr_dlsmc.core.gains import InnerLoopGains
 from nfmr_dlsmc.core.sliding_functions import saturated_sign, sig_pow
 
+__all__ = ['AbfsmcInnerLoop', 'BARRIER_PHASE', 'INTEGRAL_PHASE']
+
 #: Phases of the adaptive gain eta_hat.
 INTEGRAL_PHASE = 0
 BARRIER_PHASE = 1
@@ -48,33 +50,31 @@ class AbfsmcInnerLoop:
       growing towards |s| = eps is what holds the band against a disturbance larger than
       the cap.
 
-    Attributes (after a step)
-    -------------------------
+    Attributes
+    ----------
+    gains : InnerLoopGains
+        The gains in use; assigning new ones takes effect at the next step.
+    omega_max : float
+        The yaw-rate limit the anti-windup option compares with [rad/s].
+
+    After a step:
+
     eta_hat : float
         Adaptive gain used in this step [rad/s].
     phase : int
         ``INTEGRAL_PHASE`` or ``BARRIER_PHASE``.
     t_bar_reached : bool
         True once |s| has reached eps/2 at least once.
+
     """
 
-    __slots__ = ('omega_max', '_gains', '_r1', '_eta_integral', '_eta_rate', 'phase', 'eta_hat',
+    __slots__ = ('omega_max', 'gains', '_eta_integral', '_eta_rate', 'phase', 'eta_hat',
                  't_bar_reached')
 
     def __init__(self, gains: InnerLoopGains, omega_max: float = math.inf):
         self.omega_max = omega_max  # [rad/s], used by the anti-windup option only
         self.gains = gains
         self.reset()
-
-    @property
-    def gains(self) -> InnerLoopGains:
-        """The gains in use; assigning new ones takes effect at the next step."""
-        return self._gains
-
-    @gains.setter
-    def gains(self, gains: InnerLoopGains) -> None:
-        self._gains = gains
-        self._r1 = gains.q1 / gains.p1
 
     def reset(self) -> None:
         """Back to the integral phase with eta_hat = 0."""
@@ -86,12 +86,12 @@ class AbfsmcInnerLoop:
 
     def step(self, s_theta: float, thetadot_d: float, dt: float) -> float:
         """
-        One control period: s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s].
+        Run one control period: s_theta [rad], thetadot_d [rad/s] -> unsaturated omega [rad/s].
 
         ``dt`` [s] is the time since the previous step; the integral of eq. (12) first adds
         the previous step's integrand times ``dt``.
         """
-        g = self._gains
+        g = self.gains
         self._eta_integral += self._eta_rate * dt
         a = abs(s_theta)
         if self.phase == BARRIER_PHASE and a >= g.eps:
@@ -106,7 +106,7 @@ class AbfsmcInnerLoop:
             eta = g.eta_max
         self.eta_hat = eta
         switch = saturated_sign(s_theta, g.boundary_layer)
-        omega = thetadot_d - g.k1 * sig_pow(s_theta, self._r1) - eta * switch
+        omega = thetadot_d - g.k1 * sig_pow(s_theta, g.q1 / g.p1) - eta * switch
         held = capped or (g.anti_windup and abs(omega) > self.omega_max)
         self._eta_rate = g.L0 + g.L1 * a if integrating and not held else 0.0
         return omega

@@ -12,21 +12,52 @@ from dataclasses import asdict, dataclass
 from nfmr_dlsmc.core.angles import wrap_angles
 import numpy as np
 
+__all__ = ['COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria', 'HOLD_FROM',
+           'HOLD_ROWS', 'METRIC_LABELS', 'TrackingMetrics', 'convergence_time',
+           'error_criteria', 'finite_or_none', 'format_metric', 'hold_metrics', 'metric_rows',
+           'sample_durations', 'simulation_metrics', 'total_variation_rate',
+           'tracking_metrics']
+
 #: Distance error below which the robot counts as on the trajectory (section 4.2) [m].
 CONVERGENCE_TOLERANCE = 1e-3
 #: Distance error of the coarser convergence time ``t_conv_1cm`` [m].
 COARSE_TOLERANCE = 1e-2
 #: Default start of the hold window [s]: the hold figures cover t >= this.
 HOLD_FROM = 15.0
+#: The label of each figure of :class:`TrackingMetrics` in a metrics table.
+METRIC_LABELS = {
+    'iae': 'IAE of distance [m*s]',
+    'ise': 'ISE of distance [m^2*s]',
+    'std': 'STD of distance [m]',
+    't_conv': 'convergence time (1 mm) [s]',
+    'final_distance': 'final distance [m]',
+    'max_v': 'max v [m/s]',
+    'max_abs_omega': 'max |omega| [rad/s]',
+    'theta_e_iae': 'IAE of theta_e [rad*s]',
+    'max_abs_theta_e_after_conv': 'max |theta_e| after t_conv [rad]',
+    'theta_r_iae': 'IAE of theta - theta_r [rad*s]',
+    'omega_tv_after_conv': 'omega total variation after t_conv [rad/s^2]',
+    't_conv_1cm': 'convergence time (1 cm) [s]',
+    'hold_distance_p99': 'hold: distance p99 [m]',
+    'hold_distance_max': 'hold: distance max [m]',
+    'hold_theta_e_p99': 'hold: |theta_e| p99 [rad]',
+    'hold_theta_e_max': 'hold: |theta_e| max [rad]',
+    'hold_omega_tv': 'hold: omega total variation [rad/s^2]',
+    'hold_omega_saturated': 'hold: omega saturated [-]',
+    'hold_steer_rate_max': 'hold: steer command rate max [rad/s]',
+    'hold_steer_joint_rate_max': 'hold: steer joint rate max [rad/s]',
+}
+
+
+def metric_rows(fields) -> tuple:
+    """Return the rows (label, TrackingMetrics field) of a metrics table of ``fields``."""
+    return tuple((METRIC_LABELS[name], name) for name in fields)
+
+
 #: The hold figures in metrics tables: (label, TrackingMetrics field).
-HOLD_ROWS = (('hold: distance p99 [m]', 'hold_distance_p99'),
-             ('hold: distance max [m]', 'hold_distance_max'),
-             ('hold: |theta_e| p99 [rad]', 'hold_theta_e_p99'),
-             ('hold: |theta_e| max [rad]', 'hold_theta_e_max'),
-             ('hold: omega total variation [rad/s^2]', 'hold_omega_tv'),
-             ('hold: omega saturated [-]', 'hold_omega_saturated'),
-             ('hold: steer command rate max [rad/s]', 'hold_steer_rate_max'),
-             ('hold: steer joint rate max [rad/s]', 'hold_steer_joint_rate_max'))
+HOLD_ROWS = metric_rows(('hold_distance_p99', 'hold_distance_max', 'hold_theta_e_p99',
+                         'hold_theta_e_max', 'hold_omega_tv', 'hold_omega_saturated',
+                         'hold_steer_rate_max', 'hold_steer_joint_rate_max'))
 
 
 @dataclass(frozen=True)
@@ -39,7 +70,7 @@ class ErrorCriteria:
 
 
 def error_criteria(error: np.ndarray, dt) -> ErrorCriteria:
-    """IAE = sum |e| dt, ISE = sum e^2 dt and the (population) standard deviation of e."""
+    """Return IAE = sum |e| dt, ISE = sum e^2 dt and the (population) standard deviation of e."""
     error = np.asarray(error, dtype=float)
     return ErrorCriteria(iae=float(np.sum(np.abs(error) * dt)),
                          ise=float(np.sum(error ** 2 * dt)),
@@ -49,9 +80,9 @@ def error_criteria(error: np.ndarray, dt) -> ErrorCriteria:
 def convergence_time(t: np.ndarray, distance: np.ndarray,
                      tolerance: float = CONVERGENCE_TOLERANCE) -> float | None:
     """
-    The last time [s] the distance error exceeds ``tolerance`` [m].
+    Return the last time [s] the distance error exceeds ``tolerance`` [m].
 
-    Returns 0.0 when it never exceeds it and ``None`` when it still exceeds it at the last
+    It is 0.0 when it never exceeds it and ``None`` when it still exceeds it at the last
     sample (the run never settles).
     """
     above = np.flatnonzero(np.asarray(distance) > tolerance)
@@ -63,7 +94,7 @@ def convergence_time(t: np.ndarray, distance: np.ndarray,
 
 
 def total_variation_rate(signal: np.ndarray, dt) -> float:
-    """Chattering measure: sum |signal[k+1] - signal[k]| per second of signal [unit/s]."""
+    """Return sum |signal[k+1] - signal[k]| per second of signal [unit/s] (chattering)."""
     signal = np.asarray(signal, dtype=float)
     if signal.size < 2:
         return 0.0
@@ -144,14 +175,15 @@ class TrackingMetrics:
     hold_steer_joint_rate_max: float | None = None
 
     def as_dict(self) -> dict:
-        """The metrics as a JSON-ready dict."""
+        """Return the metrics as a JSON-ready dict."""
         return asdict(self)
 
 
 def sample_durations(t: np.ndarray) -> np.ndarray:
     """
-    Each sample's duration [s] for uneven sampling: the time to the next sample (the
-    last sample gets the median).
+    Return each sample's duration [s] for uneven sampling.
+
+    A sample lasts until the next one; the last sample gets the median duration.
     """
     t = np.asarray(t, dtype=float)
     if t.size < 2:
@@ -160,16 +192,17 @@ def sample_durations(t: np.ndarray) -> np.ndarray:
     return np.append(steps, np.median(steps))
 
 
-def _finite_or_none(value: float) -> float | None:
+def finite_or_none(value: float) -> float | None:
+    """Return ``value`` as a float, or None for NaN and inf (a figure that does not exist)."""
     return float(value) if np.isfinite(value) else None
 
 
 def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
                  omega_saturated=None, steer=None, steer_joint_velocity=None) -> dict:
     """
-    The figures of holding the path over the samples with t >= ``hold_from`` [s].
+    Return the figures of holding the path over the samples with t >= ``hold_from`` [s].
 
-    Returns the ``hold_*`` fields of :class:`TrackingMetrics` as a dict (see there); a
+    They are the ``hold_*`` fields of :class:`TrackingMetrics` as a dict (see there); a
     figure is None when no sample lies in the window or its input is missing
     (``omega_saturated``: the controller's per-tick flag that omega was clipped to its
     limit; ``steer`` (N, 4) [rad]; ``steer_joint_velocity`` (N, 4) [rad/s]).
@@ -187,8 +220,8 @@ def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
     w = np.asarray(omega, dtype=float)[after]
     weights = np.broadcast_to(np.asarray(dt, dtype=float), t.shape)[after]
     figures.update(hold_distance_p99=float(np.percentile(d, 99)), hold_distance_max=float(d.max()),
-                   hold_theta_e_p99=_finite_or_none(np.percentile(th, 99)),
-                   hold_theta_e_max=_finite_or_none(th.max()),
+                   hold_theta_e_p99=finite_or_none(np.percentile(th, 99)),
+                   hold_theta_e_max=finite_or_none(th.max()),
                    hold_omega_tv=total_variation_rate(w, weights))
     if omega_saturated is not None:
         figures['hold_omega_saturated'] = float(np.mean(np.asarray(omega_saturated)[after] != 0))
@@ -206,12 +239,12 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
                      hold_from: float = HOLD_FROM, omega_saturated=None, steer=None,
                      steer_joint_velocity=None) -> TrackingMetrics:
     """
-    Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s] (a float,
-    or an array of per-sample durations, see :func:`sample_durations`).
+    Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s].
 
     Parameters
     ----------
-    t : array [s]
+    t : array
+        Sample times [s].
     x, y, theta : arrays
         Pose of P [m, m, rad].
     x_d, y_d : arrays
@@ -222,6 +255,8 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
         Reference tangent direction, eq. (7) [rad].
     v, omega : arrays
         Applied inputs [m/s], [rad/s].
+    dt : float or array
+        Sampling period [s], or each sample's duration (:func:`sample_durations`).
     hold_from, omega_saturated, steer, steer_joint_velocity
         For the hold figures, see :func:`hold_metrics`.
 
@@ -255,9 +290,10 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
 
 def simulation_metrics(result, hold_from: float = HOLD_FROM) -> TrackingMetrics:
     """
-    :func:`tracking_metrics` of a :class:`~nfmr_dlsmc.plants.kinematic.SimResult`, with its
-    saturation flags, commanded steer angles and measured steer joint rates where the
-    controller and the plant have them.
+    Return the :func:`tracking_metrics` of a :class:`~nfmr_dlsmc.plants.kinematic.SimResult`.
+
+    With its saturation flags, commanded steer angles and measured steer joint rates where
+    the controller and the plant have them.
     """
     return tracking_metrics(
         result.t, result.state[:, 0], result.state[:, 1], result.state[:, 2],
@@ -268,8 +304,10 @@ def simulation_metrics(result, hold_from: float = HOLD_FROM) -> TrackingMetrics:
 
 def format_metric(value) -> str:
     """
-    A metric for a table: four decimals, or four significant digits below 0.01; — for
-    None or NaN (never settles, does not apply, or the law has no theta_d).
+    Format a metric for a table.
+
+    Four decimals, or four significant digits below 0.01; — for None or NaN (never
+    settles, does not apply, or the law has no theta_d).
     """
     if value is None or np.isnan(value):
         return '—'

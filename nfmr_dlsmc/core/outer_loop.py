@@ -5,6 +5,8 @@ import math
 from nfmr_dlsmc.core.gains import adapted_rates, OuterLoopGains
 from nfmr_dlsmc.core.sliding_functions import bounded_rate, bounded_rate_slope, reaching_term_slope
 
+__all__ = ['BtintsmcOuterLoop']
+
 
 class BtintsmcOuterLoop:
     """
@@ -48,19 +50,23 @@ class BtintsmcOuterLoop:
 
     @property
     def gains(self) -> OuterLoopGains:
-        """The gains in use; assigning new ones takes effect at the next step."""
+        """Return the gains in use; assigning new ones takes effect at the next step."""
         return self._gains
 
     @gains.setter
     def gains(self, gains: OuterLoopGains) -> None:
         self._gains = gains
+        self._derive(gains)
+        self.C1, self.C2 = gains.C1, gains.C2
+        if self._adaptive and self._started:
+            self.C1, self.C2 = adapted_rates(gains.C1, gains.C2, self._ex0, self._ey0)
+
+    def _derive(self, gains: OuterLoopGains) -> None:
+        """Set what the law derives from its gains: the exponents and the options."""
         self._r2 = gains.q2 / gains.p2
         self._r3 = gains.q3 / gains.p3
         self._adaptive = gains.adaptive_ratio
         self._zone = gains.linear_zone  # [m]
-        self.C1, self.C2 = gains.C1, gains.C2
-        if self._adaptive and self._started:
-            self.C1, self.C2 = adapted_rates(gains.C1, gains.C2, self._ex0, self._ey0)
 
     def reset(self) -> None:
         """Forget e(0) and the integrals; the next step defines e(0)."""
@@ -80,7 +86,7 @@ class BtintsmcOuterLoop:
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
         """
-        One control period: errors [m] and reference velocity [m/s] -> (u_x, u_y) [m/s].
+        Run one control period: errors [m] and reference velocity [m/s] -> (u_x, u_y) [m/s].
 
         ``dt`` [s] is the time since the previous step: the integral first adds the
         previous step's alpha times ``dt`` (a left Riemann sum), then s is formed.
@@ -113,7 +119,7 @@ class BtintsmcOuterLoop:
     def input_rate(self, xdot_e: float, ydot_e: float, xddot_d: float,
                    yddot_d: float) -> tuple[float, float]:
         """
-        Time derivative (u_x', u_y') [m/s^2] of the inputs of the last step.
+        Return the time derivative (u_x', u_y') [m/s^2] of the inputs of the last step.
 
         Eqs (34), (35) differentiated along the error rate (x_e', y_e') [m/s]:
 

@@ -2,11 +2,14 @@
 
 import math
 
+__all__ = ['bounded_rate', 'bounded_rate_slope', 'reaching_term', 'reaching_term_slope',
+           'saturated_sign', 'sig_pow', 'sign']
+
 _TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
 
 
 def sig_pow(s: float, r: float) -> float:
-    """sign(s) |s|^r: the sign-preserving power s^(q/p) for odd q, p (doc/design.md, D7)."""
+    """Return sign(s) |s|^r: the sign-preserving power s^(q/p) for odd q, p (doc/design.md, D7)."""
     if s >= 0.0:
         return s ** r
     return -((-s) ** r)
@@ -14,7 +17,7 @@ def sig_pow(s: float, r: float) -> float:
 
 def bounded_rate(e: float, xi: float, r: float, linear_zone: float = 0.0) -> float:
     """
-    alpha(e) of eq. (33): the bounded time-varying rate of the BTINTSMC surface.
+    Return alpha(e) of eq. (33): the bounded time-varying rate of the BTINTSMC surface.
 
     alpha(e) = sin(sign(e) pi |e|^r / (2 xi^r))  for |e| <= xi,
     alpha(e) = sign(e)                           for |e| > xi,
@@ -47,7 +50,7 @@ def bounded_rate(e: float, xi: float, r: float, linear_zone: float = 0.0) -> flo
 
 def bounded_rate_slope(e: float, xi: float, r: float, linear_zone: float) -> float:
     """
-    D alpha / d e [1/m] of :func:`bounded_rate` (eq. 33 differentiated).
+    Return d alpha / d e [1/m] of :func:`bounded_rate` (eq. 33 differentiated).
 
     alpha'(e) = (pi r / 2) cos(pi |e|^r / (2 xi^r)) |e|^(r - 1) / xi^r  for d <= |e| <= xi,
     alpha(d) / d inside the linear zone |e| < d, and 0 beyond xi. With d = 0 the slope at
@@ -65,13 +68,13 @@ def bounded_rate_slope(e: float, xi: float, r: float, linear_zone: float) -> flo
 
 
 def reaching_term(s: float, r: float, h: float) -> float:
-    """g(s) = |s|^r erf(h s): the reaching term of eqs (34), (35) without its gain [m^r]."""
+    """Return g(s) = |s|^r erf(h s): the reaching term of eqs (34), (35) without its gain [m^r]."""
     return abs(s) ** r * math.erf(h * s)
 
 
 def reaching_term_slope(s: float, r: float, h: float) -> float:
     """
-    dg/ds of g(s) = |s|^r erf(h s) [m^(r-1)]:
+    Return dg/ds [m^(r-1)] of the reaching term g(s) = |s|^r erf(h s).
 
     g'(s) = r |s|^(r-1) |erf(h s)| + |s|^r (2 h / sqrt(pi)) exp(-h^2 s^2),
 
@@ -85,13 +88,13 @@ def reaching_term_slope(s: float, r: float, h: float) -> float:
 
 
 def sign(s: float) -> float:
-    """sign(s) in {-1, 0, 1}."""
+    """Return the sign of s: -1, 0 or 1."""
     return 1.0 if s > 0.0 else (-1.0 if s < 0.0 else 0.0)
 
 
 def saturated_sign(s: float, layer: float) -> float:
     """
-    sat(s / layer): the boundary-layer sign (Slotine & Li 1991, section 7.3).
+    Return sat(s / layer): the boundary-layer sign (Slotine & Li 1991, section 7.3).
 
     Linear inside |s| < layer, sign(s) outside; ``layer`` = 0 gives the plain sign(s).
     """

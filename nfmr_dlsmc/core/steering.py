@@ -13,45 +13,54 @@ agrees with the rigid-body geometry below.
 
 from dataclasses import dataclass
 import math
+from typing import ClassVar
 
-from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
+from nfmr_dlsmc.core.schema import (
+    check_fields,
+    documented,
+    FINITE,
+    param,
+    POSITIVE,
+    positive_up_to,
+    within,
+)
+from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
+
+__all__ = ['RobotGeometry', 'SteerMode', 'WHEEL_NAMES', 'WheelCommands', 'centre_twist',
+           'front_steer_from_yaw_rate', 'steer_angle_series', 'unicycle_from_wheels',
+           'wheel_commands', 'wheel_commands_for_twist', 'yaw_rate_from_front_steer']
 
 #: Wheel order of every per-wheel array.
 WHEEL_NAMES = ('front_left', 'front_right', 'rear_left', 'rear_right')
 
 
+@documented
 @dataclass(frozen=True)
 class RobotGeometry:
     """
-    Chassis geometry; defaults from the paper's Table 1.
+    Chassis geometry the wheel mapping uses; defaults from the paper's Table 1.
 
-    Attributes
-    ----------
-    wheelbase : float
-        L, distance between the front and rear axles [m] (Table 1 length 0.89 m).
-    track : float
-        Distance between the left and right wheels [m] (Table 1 width 0.53 m).
-    wheel_radius : float
-        [m] (Table 1 wheel diameter 0.28 m).
-    steer_limit : float
-        Largest |steer angle| a steer joint can reach [rad], in (0, pi/2].
-
+    Declared here once: the simulated chassis (``nfmr_sim.urdf.ChassisConfig``) extends
+    it with what pybullet needs, under its own parameter prefix ``chassis``.
     """
 
-    wheelbase: float = 0.89
-    track: float = 0.53
-    wheel_radius: float = 0.14
-    steer_limit: float = math.pi / 2
+    prefix: ClassVar[str] = 'geometry'
+
+    wheelbase: float = param(0.89, 'm', 'L, distance between the front and rear axles '
+                             '(Table 1 length)', POSITIVE, read_only=True)
+    track: float = param(0.53, 'm', 'distance between the left and right wheels (Table 1 '
+                         'width)', POSITIVE, read_only=True)
+    wheel_radius: float = param(0.14, 'm', 'tyre radius (Table 1 wheel diameter 0.28 m)',
+                                POSITIVE, read_only=True)
+    steer_limit: float = param(math.pi / 2, 'rad', 'largest |steer angle| of a steer joint '
+                               '(the sim rejects steer commands beyond it)',
+                               positive_up_to(math.pi / 2, 'pi/2', inclusive=True,
+                                              why=' (a wheel reverses beyond that)'),
+                               read_only=True)
 
     def __post_init__(self):
-        check_positive('geometry.wheelbase', self.wheelbase, 'm')
-        check_positive('geometry.track', self.track, 'm')
-        check_positive('geometry.wheel_radius', self.wheel_radius, 'm')
-        limit = check_positive('geometry.steer_limit', self.steer_limit, 'rad')
-        if limit > math.pi / 2:
-            raise ParameterError('geometry.steer_limit', self.steer_limit,
-                                 'must be <= pi/2 (a wheel reverses beyond that)', 'rad')
+        check_fields(self)
 
     @property
     def wheel_positions(self) -> np.ndarray:
@@ -60,35 +69,29 @@ class RobotGeometry:
         return np.array([[a, b], [a, -b], [-a, b], [-a, -b]])
 
 
+@documented
 @dataclass(frozen=True)
 class SteerMode:
-    """
-    The double-Ackermann configuration (j1, j2) of eqs (1), (2).
+    """The double-Ackermann configuration (j1, j2) of eqs (1), (2); doc/design.md, D1."""
 
-    Attributes
-    ----------
-    j1 : float
-        -tan(delta_r)/tan(delta_f), in [-1, 1] (doc/design.md, D1).
-    j2 : float
-        Must equal 1 - j1.
+    prefix: ClassVar[str] = 'steering'
 
-    """
-
-    j1: float = 1.0
-    j2: float = 0.0
+    j1: float = param(1.0, '', '-tan(delta_r)/tan(delta_f): 1 double Ackermann, 0 '
+                      'front-only, -1 crab (which the DLSMC refuses); sets the tracked point '
+                      'P', within(-1.0, 1.0, ' (1 double Ackermann, 0 front-only, -1 crab)'),
+                      read_only=True)
+    j2: float = param(0.0, '', 'second coefficient of the effective wheelbase (j1 + j2) L '
+                      'of eq. (2)', FINITE, also='= 1 - j1', read_only=True)
 
     def __post_init__(self):
-        j1 = check_finite('j1', self.j1)
-        j2 = check_finite('j2', self.j2)
-        if not -1.0 <= j1 <= 1.0:
-            raise ParameterError('j1', self.j1, 'must be in [-1, 1] (1 double Ackermann, '
-                                 '0 front-only, -1 crab)')
-        if not math.isclose(j1 + j2, 1.0, abs_tol=1e-9):
-            raise ParameterError('j2', self.j2, f'must equal 1 - j1 = {1.0 - j1:g}')
+        check_fields(self)
+        if not math.isclose(self.j1 + self.j2, 1.0, abs_tol=1e-9):
+            raise ParameterError(f'{self.prefix}.j2', self.j2,
+                                 f'must equal 1 - j1 = {1.0 - self.j1:g}')
 
     @property
     def is_crab(self) -> bool:
-        """True for in-phase steering (j1 = -1): translation without yaw."""
+        """Tell whether this is in-phase steering (j1 = -1): translation without yaw."""
         return self.j1 == -1.0
 
     def zero_slip_offset(self, wheelbase: float) -> float:
@@ -160,7 +163,7 @@ def centre_twist(v: float, omega: float, mode: SteerMode, wheelbase: float,
 def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: RobotGeometry,
                              hold_steer=None) -> WheelCommands:
     """
-    Steer angles and wheel speeds that realise the body twist (vx, vy, omega) at the centre.
+    Return the steer angles and wheel speeds that realise the centre's twist (vx, vy, omega).
 
     Wheel i at (x_i, y_i) moves at (vx - omega y_i, vy + omega x_i): perpendicular to its
     radius from the instantaneous centre of rotation (doc/design.md, D3). Its steer angle is
@@ -174,6 +177,7 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
     omega : float
         Yaw rate [rad/s].
     geometry : RobotGeometry
+        Wheel positions, radius and steer limit.
     hold_steer : array-like (4,), optional
         Steer angles [rad] kept by wheels that do not move (default 0).
 
@@ -197,16 +201,17 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
 
 def wheel_commands(v: float, omega: float, geometry: RobotGeometry, mode: SteerMode,
                    crab_angle: float = 0.0, hold_steer=None) -> WheelCommands:
-    """Unicycle inputs (v [m/s], omega [rad/s]) at P -> per-wheel commands (doc/design.md, D1-D3)."""
+    """Map unicycle inputs (v [m/s], omega [rad/s]) at P to wheels (doc/design.md, D1-D3)."""
     vx, vy, w = centre_twist(v, omega, mode, geometry.wheelbase, crab_angle)
     return wheel_commands_for_twist(vx, vy, w, geometry, hold_steer)
 
 
 def steer_angle_series(v, omega, geometry: RobotGeometry, mode: SteerMode) -> np.ndarray:
     """
-    The steer angles [rad] (N, 4) that :func:`wheel_commands` gives for a series of
-    unicycle inputs v [m/s], omega [rad/s] at P (N each), wheels that stand still keeping
-    their previous angle (0 at the start); vectorised over the series.
+    Return the steer angles [rad] (N, 4) :func:`wheel_commands` gives for a series.
+
+    The series are unicycle inputs v [m/s], omega [rad/s] at P (N each); wheels that
+    stand still keep their previous angle (0 at the start); vectorised over the series.
     """
     v = np.asarray(v, dtype=float)
     omega = np.asarray(omega, dtype=float)
@@ -226,9 +231,10 @@ def steer_angle_series(v, omega, geometry: RobotGeometry, mode: SteerMode) -> np
     return np.clip(filled, -geometry.steer_limit, geometry.steer_limit)
 
 
-def twist_from_wheels(steer, wheel_speed, geometry: RobotGeometry) -> tuple[float, float, float, float]:
+def _twist_from_wheels(steer, wheel_speed,
+                       geometry: RobotGeometry) -> tuple[float, float, float, float]:
     """
-    Least-squares body twist (vx, vy, omega) of the centre from measured wheel states.
+    Return the least-squares twist (vx, vy, omega) of the centre from measured wheel states.
 
     Solves  r w_i cos(d_i) = vx - omega y_i,  r w_i sin(d_i) = vy + omega x_i  for all
     four wheels.
@@ -265,6 +271,6 @@ def unicycle_from_wheels(steer, wheel_speed, geometry: RobotGeometry,
     The inverse of :func:`wheel_commands`: v is the forward speed of P and the lateral
     velocity of P is ~0 whenever the wheels follow the mode's geometry.
     """
-    vx, vy, omega, _ = twist_from_wheels(steer, wheel_speed, geometry)
+    vx, vy, omega, _ = _twist_from_wheels(steer, wheel_speed, geometry)
     lateral = vy + omega * mode.zero_slip_offset(geometry.wheelbase)
     return vx, omega, lateral

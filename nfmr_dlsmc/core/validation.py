@@ -11,6 +11,9 @@ from numbers import Integral, Real
 
 from nfmr_dlsmc.core.errors import NfmrError
 
+__all__ = ['ParameterError', 'check_exponent_pair', 'check_finite', 'check_greater',
+           'check_non_negative', 'check_positive']
+
 
 class ParameterError(NfmrError, ValueError):
     """An invalid configuration value; ``parameter`` holds the parameter's name."""
@@ -34,7 +37,7 @@ def check_finite(name: str, value, unit: str = '') -> float:
 
 
 def check_positive(name: str, value, unit: str = '') -> float:
-    """A finite number > 0."""
+    """Return ``value`` as a float; reject what is not a finite number > 0."""
     number = check_finite(name, value, unit)
     if number <= 0.0:
         raise ParameterError(name, value, 'must be > 0', unit)
@@ -42,7 +45,7 @@ def check_positive(name: str, value, unit: str = '') -> float:
 
 
 def check_non_negative(name: str, value, unit: str = '') -> float:
-    """A finite number >= 0."""
+    """Return ``value`` as a float; reject what is not a finite number >= 0."""
     number = check_finite(name, value, unit)
     if number < 0.0:
         raise ParameterError(name, value, 'must be >= 0', unit)
@@ -50,15 +53,15 @@ def check_non_negative(name: str, value, unit: str = '') -> float:
 
 
 def check_greater(name: str, value, bound: float, unit: str = '') -> float:
-    """A finite number > ``bound``."""
+    """Return ``value`` as a float; reject what is not a finite number > ``bound``."""
     number = check_finite(name, value, unit)
     if number <= bound:
         raise ParameterError(name, value, f'must be > {bound:g}', unit)
     return number
 
 
-def check_odd_positive_int(name: str, value) -> int:
-    """A positive odd integer (the exponents p, q of the terminal sliding terms)."""
+def _check_odd_positive_int(name: str, value) -> int:
+    """Return ``value`` as an int; reject what is not a positive odd integer."""
     if isinstance(value, bool) or not isinstance(value, Integral):
         raise ParameterError(name, value, 'must be a positive odd integer')
     if value <= 0 or value % 2 == 0:
@@ -67,9 +70,9 @@ def check_odd_positive_int(name: str, value) -> int:
 
 
 def check_exponent_pair(p_name: str, p, q_name: str, q) -> tuple[int, int]:
-    """Positive odd integers p, q with 1 < p/q < 2 (the paper's condition on each pair)."""
-    p = check_odd_positive_int(p_name, p)
-    q = check_odd_positive_int(q_name, q)
+    """Return (p, q): positive odd integers with 1 < p/q < 2, the paper's condition on a pair."""
+    p = _check_odd_positive_int(p_name, p)
+    q = _check_odd_positive_int(q_name, q)
     if not 1.0 < p / q < 2.0:
         raise ParameterError(
             p_name, p, f'must satisfy 1 < {p_name}/{q_name} < 2 with {q_name} = {q} '

@@ -49,6 +49,7 @@ class BatchResult:
 
 
 def _sig_pow(s, r):
+    """Return sign(s) |s|^r element-wise (doc/design.md, D7)."""
     return np.sign(s) * np.abs(s) ** r
 
 
@@ -82,14 +83,17 @@ def simulate_batch_parallel(config: DlsmcConfig, trajectory, x0, duration: float
 
 
 def _simulate_part(arguments) -> BatchResult:
+    """Run :func:`simulate_batch` on one share of the robots (in a worker process)."""
     return simulate_batch(*arguments)
 
 
 def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
                    disturbance=None, record: bool = False, outer=None) -> BatchResult:
     """
-    Simulate N robots from the starts ``x0`` (N, 3) [m, m, rad] for ``duration`` [s]
-    at the configured period; ``disturbance`` is a yaw-rate profile as for ``simulate``.
+    Simulate N robots from the starts ``x0`` (N, 3) [m, m, rad] for ``duration`` [s].
+
+    They run at the configured period; ``disturbance`` is a yaw-rate profile as for
+    :func:`~nfmr_dlsmc.plants.kinematic.simulate`.
 
     ``outer`` optionally maps names of :data:`PER_ROBOT_GAINS` to arrays of length N, one
     value per robot (each must satisfy its OuterLoopGains rule), so that many gain sets are
@@ -207,6 +211,6 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     mean = sum_d / n_steps
     t_conv = np.where(last_exceed == n_steps - 1, np.nan,
                       np.where(last_exceed < 0, 0.0, last_exceed * dt))
-    return BatchResult(iae=iae, ise=ise, std=np.sqrt(np.maximum(sum_d2 / n_steps - mean ** 2, 0.0)),
-                       t_conv=t_conv, final_distance=d, max_v=max_v, max_abs_omega=max_w,
-                       states=states)
+    std = np.sqrt(np.maximum(sum_d2 / n_steps - mean ** 2, 0.0))
+    return BatchResult(iae=iae, ise=ise, std=std, t_conv=t_conv, final_distance=d, max_v=max_v,
+                       max_abs_omega=max_w, states=states)

@@ -54,20 +54,22 @@ class SimResult:
 
     @property
     def distance_error(self) -> np.ndarray:
-        """sqrt(x_e^2 + y_e^2) [m] at each step (the error of Table 2)."""
+        """Return sqrt(x_e^2 + y_e^2) [m] at each step (the error of Table 2)."""
         return np.hypot(self.state[:, 0] - self.reference[:, 0],
                         self.state[:, 1] - self.reference[:, 1])
 
     @property
     def theta_r(self) -> np.ndarray:
-        """Reference tangent direction theta_r [rad] at each step, eq. (7)."""
+        """Return the reference tangent direction theta_r [rad] at each step, eq. (7)."""
         return reference_heading(self.reference[:, 2], self.reference[:, 3])
 
 
 def sample_reference(trajectory, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
-    The reference at times ``t`` [s]: (x_d, y_d, xdot_d, ydot_d) as an (N, 4) array
-    [m, m, m/s, m/s] and (xddot_d, yddot_d) as an (N, 2) array [m/s^2].
+    Sample the reference at times ``t`` [s].
+
+    Returns (x_d, y_d, xdot_d, ydot_d) as an (N, 4) array [m, m, m/s, m/s] and
+    (xddot_d, yddot_d) as an (N, 2) array [m/s^2].
     """
     def columns(values):
         return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
@@ -78,8 +80,10 @@ def sample_reference(trajectory, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 def with_steer_angles(result: 'SimResult', geometry: RobotGeometry,
                       mode: SteerMode) -> 'SimResult':
     """
-    ``result`` of the kinematic model with the steer angles the wheel mapping would
-    command for its inputs (omega with the yaw-rate disturbance, as the chassis gets it).
+    Return ``result`` of the kinematic model with the steer angles of its inputs.
+
+    The angles are those the wheel mapping would command for (v, omega with the yaw-rate
+    disturbance, as the chassis gets it).
     """
     return replace(result, steer=steer_angle_series(result.v, result.omega + result.disturbance,
                                                     geometry, mode))
@@ -87,7 +91,7 @@ def with_steer_angles(result: 'SimResult', geometry: RobotGeometry,
 
 def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]:
     """
-    Validate a run's start: (x0 as 3 finite floats, number of steps).
+    Validate a run's start; return (x0 as 3 finite floats, number of steps).
 
     Raises
     ------
@@ -106,7 +110,8 @@ def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]
         raise ParameterError('dt', dt, f'must equal the controller period {period:g} s', 's')
     n = int(round(duration / dt))
     if n < 1:
-        raise ParameterError('duration', duration, f'must cover at least one step of {dt:g} s', 's')
+        raise ParameterError('duration', duration, f'must cover at least one step of {dt:g} s',
+                             's')
     return x0, n
 
 

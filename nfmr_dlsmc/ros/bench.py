@@ -47,6 +47,8 @@ def plain_timer_main(seconds: float) -> None:
 
 
 class _Probe(Node):
+    """Publishes odometry to the controller and times its replies and diagnostics."""
+
     def __init__(self):
         super().__init__('bench_probe')
         self.odom = self.create_publisher(Odometry, 'odom', QOS)
@@ -75,6 +77,8 @@ def _rss_mb(pid: int) -> float:
 
 def node_figures(seconds: float) -> dict:
     """
+    Measure the running nodes.
+
     The controller's 1 kHz loop (clock mode) for ``seconds``, a plain rclpy timer in the
     same conditions, odometry -> command latency across processes, and resident memory.
     """
@@ -153,7 +157,7 @@ def node_figures(seconds: float) -> dict:
 
 
 def bag_writer_throughput(messages: int = 200_000) -> dict:
-    """Messages per second BagWriter takes (a 23-value controller_state payload)."""
+    """Return the messages per second BagWriter takes (a 23-value controller_state payload)."""
     payload = serialize_message(Float64MultiArray(data=[0.1] * 23))
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()

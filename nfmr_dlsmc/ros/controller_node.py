@@ -22,55 +22,47 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
-from nfmr_dlsmc.core.validation import check_positive, ParameterError
+from nfmr_dlsmc.core.schema import from_flat
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
-from nfmr_dlsmc.ros.parameters import declare_parameters
+from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
 from nfmr_dlsmc.runtime.loop_stats import LoopStats
-from nfmr_dlsmc.runtime.params import (
-    controller_parameter_defaults,
-    controller_params,
-    parameter_descriptions,
-)
+from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, NodeOptions
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-#: Parameters that fix the structure of a run: settable only at start.
-READ_ONLY_PREFIXES = ('control_rate', 'trajectory.', 'steering.', 'geometry.', 'tick_source',
-                      'twist_stamped', 'watchdog_period')
-TICK_SOURCES = ('odom', 'clock')
-
 
 def _session_options(values: dict) -> dict:
-    """The TrackingSession options among the node's parameter values, validated."""
-    frame = values['odom_frame']
-    if not frame:
-        raise ParameterError('odom_frame', frame, 'must be a frame name')
-    return {'odom_timeout': check_positive('odom_timeout', values['odom_timeout'], 's'),
-            'odom_frame': frame,
-            'max_jump': check_positive('max_odom_jump', values['max_odom_jump'], 'm'),
-            'restart_threshold': check_positive('restart_threshold',
-                                                values['restart_threshold'], 's')}
+    """
+    Validate the node's own options among its parameter values.
+
+    Returns
+    -------
+    dict
+        The :class:`TrackingSession` options among them.
+
+    Raises
+    ------
+    ParameterError
+        For an invalid option of the node (:class:`NodeOptions`).
+
+    """
+    options = from_flat(NodeOptions, values)
+    return {'odom_timeout': options.odom_timeout, 'odom_frame': options.odom_frame,
+            'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold}
 
 
-class ControllerNode(Node):
+class ControllerNode(SchemaNode):
     """Thin wrapper: odometry -> :class:`TrackingSession` -> command messages."""
 
     def __init__(self, **kwargs):
-        super().__init__('controller', **kwargs)
-        defaults = controller_parameter_defaults()
-        read_only = [n for n in defaults if n.startswith(READ_ONLY_PREFIXES)]
-        values = declare_parameters(self, defaults, read_only, parameter_descriptions())
-        self._values = values
+        super().__init__('controller', controller_parameters(), **kwargs)
+        values = self._values = self.parameter_values
         params = controller_params(values)
         self.session = TrackingSession(params, **_session_options(values))
-        if values['tick_source'] not in TICK_SOURCES:
-            raise ParameterError('tick_source', values['tick_source'],
-                                 f"must be one of {', '.join(TICK_SOURCES)}")
-        check_positive('watchdog_period', values['watchdog_period'], 's')
         self._lock = threading.Lock()
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         twist_type = TwistStamped if values['twist_stamped'] else Twist
@@ -84,8 +76,8 @@ class ControllerNode(Node):
         self.create_subscription(Odometry, 'odom', self._on_odom, qos)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stats = LoopStats(overrun_threshold=2.0 * params.dlsmc.dt)
-        self._state_layout = [MultiArrayDimension(label=','.join(STATE_FIELDS),
-                                                  size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
+        self._state_layout = [MultiArrayDimension(
+            label=','.join(STATE_FIELDS), size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
         self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
         self._loop = LoopThread(self._clock_loop, 'dlsmc-1khz', node=self)
         self.create_timer(values['watchdog_period'], self._watchdog)
@@ -98,7 +90,7 @@ class ControllerNode(Node):
         """Validate a live change through the core config classes; apply at the next tick."""
         candidate = dict(self._values)
         for p in changes:
-            candidate[p.name] = p.value.tolist() if hasattr(p.value, 'tolist') else p.value
+            candidate[p.name] = plain_value(p.value)
         try:
             params = controller_params(candidate)
             options = _session_options(candidate)

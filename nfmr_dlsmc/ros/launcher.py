@@ -1,31 +1,30 @@
 """
-``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes, recorded to MCAP.
+The run of ``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes.
 
-Starts ``sim`` and ``controller`` from one parameter file, records every topic of the run
-into a rosbag2 MCAP bag (in this process), shows progress, and at the end prints the
-paper's metrics and those of holding the path next to the same scenario run in this process
-on the pybullet chassis (no ROS) and on the kinematic model, and writes plots.
-The last line printed is the bag directory.
+:func:`run` starts ``sim`` and ``controller`` from one parameter file, records every topic
+of the run into a rosbag2 MCAP bag (in this process), shows progress, and at the end
+prints the paper's metrics and those of holding the path next to the same scenario run in
+this process on the pybullet chassis (no ROS) and on the kinematic model, and writes
+plots. The last line printed is the bag directory. The command line is
+:mod:`nfmr_dlsmc.cli.run`.
 """
 
-import argparse
 import ctypes
 from dataclasses import dataclass
-import math
 import os
 from pathlib import Path
 import signal
 import subprocess
 import sys
+import threading
 import time
 
+from nfmr_dlsmc.analysis.evaluation import plant_run
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
-from nfmr_dlsmc.core.metrics import HOLD_FROM, simulation_metrics
-from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
+from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_analysis import (
@@ -62,8 +61,141 @@ class RunError(NfmrError, RuntimeError):
     """A run that could not complete (a child died); the message says which and why."""
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """
+    What ``nfmr-run`` is asked for: its command line.
+
+    Attributes
+    ----------
+    config : Path or None
+        Parameter file with ``sim`` and ``controller`` sections (None: the shipped
+        ``config/robot_case1.yaml``).
+    mode : str
+        ``'lockstep'`` or ``'realtime'``.
+    duration : float
+        Simulated time [s].
+    out : Path
+        Parent of the run folders.
+    no_record : bool
+        Do not write a bag.
+    gui : bool
+        Open the pybullet GUI.
+    hold_from : float
+        Start of the window of the hold figures [s].
+    stall_timeout : float
+        Stop the run when simulated time has not advanced for this long (wall clock) [s].
+    no_compare : bool
+        Skip the in-process pybullet and kinematic runs of the end table.
+
+    """
+
+    config: Path | None
+    mode: str
+    duration: float
+    out: Path
+    no_record: bool
+    gui: bool
+    hold_from: float
+    stall_timeout: float
+    no_compare: bool
+
+
+def run(options: RunOptions) -> int:
+    """
+    Run, record and report one ``nfmr-run``.
+
+    Returns
+    -------
+    int
+        The exit status: 0, 1 when a child died or the run stalled (:class:`RunError`,
+        printed with the child's log tail), 130 when interrupted.
+
+    Raises
+    ------
+    ParamsFileError
+        The parameter file cannot be read, or its controller and sim are different robots.
+    ParameterError
+        A bad parameter in the file.
+
+    """
+    config = options.config or shipped_config('robot_case1.yaml')
+    params = controller_params(load_params_file(config, 'controller'))
+    settings = robot_plant('pybullet').settings(load_params_file(config, 'sim'))
+    mismatch = _robot_mismatch(params, settings)
+    if mismatch:
+        raise ParamsFileError(f'{config}: {mismatch}')
+    run_dir = _new_run_dir(options.out, config)
+    bag_dir = run_dir / 'bag'
+    print(f'run folder {run_dir}', file=sys.stderr)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    writer = None if options.no_record else BagWriter(bag_dir)
+    recorder = None
+    executor = EventsExecutor()  # several times less CPU per message than the default
+    if writer is not None:
+        recorder = RecorderNode(writer, RUN_TOPICS, parameter_overrides=[
+            Parameter('use_sim_time', value=True)])
+        executor.add_node(recorder)
+    children = []
+    status = 0
+    clock = _ClockWatch(recorder, executor)
+    stop = _StopRequest()
+    try:
+        children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
+                                 run_dir),
+                    _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
+                                 _controller_args(config, options.mode), run_dir)]
+        _wait_for_run(children, clock, options.duration, options.stall_timeout, stop)
+        # The sim has stopped stepping at the duration: let the last command arrive, then
+        # stop the controller well within its odometry timeout, so that a run that ended as
+        # planned ends without a safety stop.
+        clock.spin(0.3)
+        _stop_children(children[1:])
+        clock.spin(0.7)  # the sim's last messages
+    except KeyboardInterrupt:
+        status = 130
+        print('\ninterrupted: stopping the run', file=sys.stderr)
+    except RunError as exc:
+        status = 1
+        print(f'\nnfmr-run: error: {exc}', file=sys.stderr)
+    finally:
+        _stop_children(children[:1])  # the sim first: no new steps
+        clock.spin(1.0)  # deliver what the controller published for the last steps
+        _stop_children(children[1:])
+        if recorder is not None:
+            clock.drain()
+            recorder.close()
+            executor.remove_node(recorder)
+            recorder.destroy_node()
+        rclpy.try_shutdown()
+        stop.release()
+    if writer is not None and status == 0:
+        _report(bag_dir, run_dir, params, settings, options, writer.counts)
+    if writer is not None:
+        print(bag_dir)
+    return status
+
+
+def _sim_args(config: Path, options: RunOptions) -> list[str]:
+    """Return the sim's ROS arguments."""
+    return ['--ros-args', '--params-file', str(config), '-p', f'mode:={options.mode}',
+            '-p', f"gui:={'true' if options.gui else 'false'}",
+            '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
+            '-p', f'max_time:={float(options.duration)!r}']
+
+
+def _controller_args(config: Path, mode: str) -> list[str]:
+    """Return the controller's ROS arguments."""
+    if mode == 'realtime':
+        return ['--ros-args', '--params-file', str(config), '-p', 'tick_source:=clock']
+    # In lockstep a slow step on a busy machine is no fault: only a sim that stopped for
+    # good should stop the robot.
+    return ['--ros-args', '--params-file', str(config),
+            '-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
+
+
 @dataclass
-class Child:
+class _Child:
     """A started node process and its log file."""
 
     name: str
@@ -71,36 +203,13 @@ class Child:
     log: Path
 
     def tail(self, lines: int = 15) -> str:
-        """The last lines of its log."""
+        """Return the last lines of its log, indented."""
         text = self.log.read_text(errors='replace').splitlines()
         return '\n'.join('    ' + line for line in text[-lines:])
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog='nfmr-run', description='Run the DLSMC against the pybullet robot as two ROS 2 '
-                                     'processes and record the run to an MCAP bag.')
-    parser.add_argument('config', nargs='?', type=Path, default=None,
-                        help="parameter file with 'sim' and 'controller' sections "
-                             '(default: config/robot_case1.yaml, the robot profile; '
-                             "config/paper_case1.yaml holds the paper's law)")
-    parser.add_argument('--mode', choices=('lockstep', 'realtime'), default='lockstep')
-    parser.add_argument('--duration', type=float, default=100.0, help='simulated time [s]')
-    parser.add_argument('--out', type=Path, default=Path('runs'), help='parent of run folders')
-    parser.add_argument('--no-record', action='store_true', help='do not write a bag')
-    parser.add_argument('--gui', action='store_true', help='open the pybullet GUI')
-    parser.add_argument('--hold-from', type=float, default=HOLD_FROM, metavar='SECONDS',
-                        help=f'start of the window of the hold figures [s] (default {HOLD_FROM:g})')
-    parser.add_argument('--stall-timeout', type=float, default=30.0, metavar='SECONDS',
-                        help='stop the run when simulated time has not advanced for this '
-                             'long (wall clock) [s] (default 30)')
-    parser.add_argument('--no-compare', action='store_true',
-                        help='skip the in-process pybullet and kinematic runs of the end table')
-    return parser
-
-
-def new_run_dir(out: Path, config: Path) -> Path:
-    """``<out>/<YYYYmmdd-HHMMSS>_<config stem>``, with a suffix rather than reuse."""
+def _new_run_dir(out: Path, config: Path) -> Path:
+    """Create ``<out>/<YYYYmmdd-HHMMSS>_<config stem>``, with a suffix rather than reuse."""
     base = out / f"{time.strftime('%Y%m%d-%H%M%S')}_{config.stem}"
     path, n = base, 1
     while path.exists():
@@ -117,10 +226,11 @@ def _die_with_parent() -> None:
         pass
 
 
-def start_child(name: str, module: str, args: list, run_dir: Path) -> Child:
+def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
     """
-    Start ``python -m module args`` in its own session (a terminal's Ctrl-C reaches only
-    the launcher, which stops the children in order), logging to ``<run_dir>/<name>.log``.
+    Start ``python -m module args`` in its own session, logging to ``<run_dir>/<name>.log``.
+
+    A terminal's Ctrl-C then reaches only the launcher, which stops the children in order.
     """
     log = run_dir / f'{name}.log'
     env = dict(os.environ, PYTHONUNBUFFERED='1')
@@ -128,10 +238,10 @@ def start_child(name: str, module: str, args: list, run_dir: Path) -> Child:
         process = subprocess.Popen([sys.executable, '-m', module, *args], stdout=fh,
                                    stderr=subprocess.STDOUT, env=env, start_new_session=True,
                                    preexec_fn=_die_with_parent)
-    return Child(name, process, log)
+    return _Child(name, process, log)
 
 
-def stop_children(children: list) -> None:
+def _stop_children(children: list) -> None:
     """SIGINT every live child, then kill what is still alive after STOP_TIMEOUT."""
     for child in children:
         if child.process.poll() is None:
@@ -145,95 +255,7 @@ def stop_children(children: list) -> None:
             child.process.wait()
 
 
-def _raise_on_sigterm(signum, frame):
-    raise KeyboardInterrupt
-
-
-def run(args) -> int:
-    config = args.config or shipped_config('robot_case1.yaml')
-    try:
-        flat_controller = load_params_file(config, 'controller')
-        params = controller_params(flat_controller)
-        settings = robot_plant('pybullet').settings(load_params_file(config, 'sim'))
-    except (ParamsFileError, ParameterError) as exc:
-        print(f'nfmr-run: error: {exc}', file=sys.stderr)
-        return 2
-    if not args.duration > 0.0:
-        print(f'nfmr-run: error: --duration must be > 0, got {args.duration}', file=sys.stderr)
-        return 2
-    if not args.hold_from >= 0.0:
-        print(f'nfmr-run: error: --hold-from must be >= 0, got {args.hold_from}', file=sys.stderr)
-        return 2
-    if not args.stall_timeout > 0.0:
-        print(f'nfmr-run: error: --stall-timeout must be > 0, got {args.stall_timeout}',
-              file=sys.stderr)
-        return 2
-    mismatch = robot_mismatch(params, settings)
-    if mismatch:
-        print(f'nfmr-run: error: {config}: {mismatch}', file=sys.stderr)
-        return 2
-    run_dir = new_run_dir(args.out, config)
-    bag_dir = run_dir / 'bag'
-    print(f'run folder {run_dir}', file=sys.stderr)
-    signal.signal(signal.SIGTERM, _raise_on_sigterm)
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    writer = None if args.no_record else BagWriter(bag_dir)
-    recorder = None
-    executor = EventsExecutor()  # several times less CPU per message than the default
-    if writer is not None:
-        recorder = RecorderNode(writer, RUN_TOPICS, parameter_overrides=[
-            Parameter('use_sim_time', value=True)])
-        executor.add_node(recorder)
-    children = []
-    status = 0
-    interrupted = False
-    clock = ClockWatch(recorder, executor)
-    try:
-        sim_args = ['--ros-args', '--params-file', str(config), '-p', f'mode:={args.mode}',
-                    '-p', f"gui:={'true' if args.gui else 'false'}",
-                    '-p', f'start_after_subscribers:={1 if args.no_record else 2}',
-                    '-p', f'max_time:={float(args.duration)!r}']
-        ctrl_args = ['--ros-args', '--params-file', str(config)]
-        if args.mode == 'realtime':
-            ctrl_args += ['-p', 'tick_source:=clock']
-        else:
-            # In lockstep a slow step on a busy machine is no fault: only a sim that stopped
-            # for good should stop the robot.
-            ctrl_args += ['-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
-        children = [start_child('sim', 'nfmr_sim.ros.sim_node', sim_args, run_dir),
-                    start_child('controller', 'nfmr_dlsmc.ros.controller_node', ctrl_args, run_dir)]
-        wait_for_run(children, clock, args.duration, args.stall_timeout)
-        # The sim has stopped stepping at --duration: let the last command arrive, then stop
-        # the controller well within its odometry timeout, so that a run that ended as
-        # planned ends without a safety stop.
-        clock.spin(0.3)
-        stop_children(children[1:])
-        clock.spin(0.7)  # the sim's last messages
-    except KeyboardInterrupt:
-        interrupted = True
-        status = 130
-        print('\ninterrupted: stopping the run', file=sys.stderr)
-    except RunError as exc:
-        status = 1
-        print(f'\nnfmr-run: {exc}', file=sys.stderr)
-    finally:
-        stop_children(children[:1])  # the sim first: no new steps
-        clock.spin(1.0)  # deliver what the controller published for the last steps
-        stop_children(children[1:])
-        if recorder is not None:
-            clock.drain()
-            recorder.close()
-            executor.remove_node(recorder)
-            recorder.destroy_node()
-        rclpy.try_shutdown()
-    if writer is not None and status == 0:
-        report(bag_dir, run_dir, params, settings, args, writer.counts)
-    if writer is not None:
-        print(bag_dir)
-    return status if not interrupted else 130
-
-
-class ClockWatch:
+class _ClockWatch:
     """Spins the recorder and tracks simulated time from /clock."""
 
     def __init__(self, recorder, executor):
@@ -242,6 +264,7 @@ class ClockWatch:
         self.started = time.monotonic()
 
     def spin(self, seconds: float) -> None:
+        """Spin the recorder (or sleep without one) for ``seconds`` [s]."""
         if self.recorder is None:
             time.sleep(seconds)
             return
@@ -251,6 +274,7 @@ class ClockWatch:
 
     @property
     def sim_time(self) -> float:
+        """Return the simulated time of the last /clock message [s] (0 without a recorder)."""
         return 0.0 if self.recorder is None else self.recorder.last_clock_ns * 1e-9
 
     def drain(self, quiet: float = 0.5) -> None:
@@ -261,10 +285,12 @@ class ClockWatch:
             self.spin(quiet)
 
 
-def robot_mismatch(params, settings) -> str | None:
+def _robot_mismatch(params, settings) -> str | None:
     """
-    Why the controller's robot and the simulated one differ, or None: the same steering
-    mode (j1, j2) and the same geometry, or the wheel mapping drives another robot.
+    Return why the controller's robot and the simulated one differ, or None.
+
+    They need the same steering mode (j1, j2) and the same geometry, or the wheel mapping
+    drives another robot.
     """
     mode = settings.world.steer_mode
     if (params.steering.j1, params.steering.j2) != (mode.j1, mode.j2):
@@ -280,17 +306,55 @@ def robot_mismatch(params, settings) -> str | None:
     return None
 
 
-def wait_for_run(children: list, clock: ClockWatch, duration: float,
-                 stall_timeout: float = math.inf) -> None:
+class _StopRequest:
     """
-    Spin until the sim reaches ``duration``, showing progress; raise :class:`RunError` if
-    a child dies or simulated time stands still for ``stall_timeout`` [s, wall clock]
-    (counted from the start, so it also covers a sim that never starts stepping).
+    Ctrl-C and SIGTERM noted by a flag and acted on between spins.
+
+    Raised at once, the interrupt could land inside a recorder callback halfway through
+    writing the bag; noted, the run loop ends the run from one place and the bag is closed
+    whole.
+    """
+
+    def __init__(self):
+        self.requested = False
+        self._previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self._previous[signum] = signal.signal(signum, self._note)
+
+    def _note(self, signum, frame) -> None:
+        self.requested = True
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if a stop was requested."""
+        if self.requested:
+            raise KeyboardInterrupt
+
+    def release(self) -> None:
+        """Give the signals back to the handlers they had before."""
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+        self._previous = {}
+
+
+def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
+                  stall_timeout: float, stop: _StopRequest) -> None:
+    """
+    Spin until the sim reaches ``duration``, showing progress.
+
+    Raises
+    ------
+    RunError
+        A child dies, or simulated time stands still for ``stall_timeout`` [s, wall
+        clock] (counted from the start, so it also covers a sim that never starts
+        stepping).
+
     """
     last_print = 0.0
     last_progress, progress_time = clock.started, -1.0
     while True:
         clock.spin(0.05)
+        stop.check()
         for child in children:
             code = child.process.poll()
             if code is not None:
@@ -319,32 +383,25 @@ def wait_for_run(children: list, clock: ClockWatch, duration: float,
     print(file=sys.stderr)
 
 
-def kinematic_run(params, x0, duration: float):
-    """The run on the kinematic model, with the steer angles the mapping would command."""
-    run = simulate(DlsmcController(params.dlsmc), params.trajectory, x0, duration,
-                   params.dlsmc.dt)
-    return with_steer_angles(run, params.geometry, params.steering)
-
-
-def report(bag_dir, run_dir, params, settings, args, counts) -> None:
+def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> None:
     """
-    Print the metrics table (the ROS run, and unless ``--no-compare`` the same scenario
-    on the in-process pybullet plant and the kinematic model) and write plots.
+    Print the metrics table and write plots.
+
+    The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
+    the in-process pybullet plant and the kinematic model.
     """
     contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC])
     series = state_series(contents)
-    columns = [('ROS pybullet', state_metrics(series, args.hold_from,
+    columns = [('ROS pybullet', state_metrics(series, options.hold_from,
                                               steer_joint_rates(contents)))]
     runs = [('ROS pybullet', series)]
-    if not args.no_compare:
+    if not options.no_compare:
         print('the same scenario in this process: pybullet, then the kinematic model ...',
               file=sys.stderr, flush=True)
-        plants = (('in-process pybullet', robot_plant('pybullet').simulate(
-                      DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
-                      args.duration, settings.world, params.geometry, params.steering, None, None)),
-                  ('kinematic', kinematic_run(params, settings.initial_pose, args.duration)))
-        for label, sim in plants:
-            columns.append((label, simulation_metrics(sim, args.hold_from)))
+        for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
+            sim = plant_run(plant, DlsmcController(params.dlsmc), params, params.trajectory,
+                            settings.initial_pose, options.duration, settings.world)
+            columns.append((label, simulation_metrics(sim, options.hold_from)))
             plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
                        'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
                        'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}
@@ -356,12 +413,3 @@ def report(bag_dir, run_dir, params, settings, args, counts) -> None:
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
-
-
-def main(argv=None) -> int:
-    """Entry point of ``nfmr-run``."""
-    return run(build_parser().parse_args(argv))
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,6 +1,10 @@
 """
-The ``main`` of our node executables: start, spin, stop, and refuse bad configuration
-with one line naming the problem (exit code 2) instead of a traceback.
+The ``main`` of our node executables: start, spin, stop.
+
+A user error (an :class:`~nfmr_dlsmc.core.errors.NfmrError`: a bad parameter, an
+unreadable parameter file, ROS arguments rclpy refuses) ends the node as one line
+``<prog>: error: <message>`` with exit status 2, as in every command, instead of a
+traceback.
 """
 
 from pathlib import Path
@@ -8,46 +12,43 @@ import sys
 import threading
 import traceback
 
-from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.runtime.params import ParamsFileError, read_yaml
+from nfmr_dlsmc.core.errors import NfmrError
+from nfmr_dlsmc.runtime.params import read_yaml
+from nfmr_dlsmc.runtime.user_errors import report_user_error
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 
-def params_files(args: list) -> list:
-    """The ``--params-file`` paths among ROS arguments."""
-    return [args[i + 1] for i, a in enumerate(args[:-1]) if a == '--params-file']
-
-
-def check_params_file(path: str) -> str | None:
-    """Why a parameter file cannot be used (missing, unreadable, bad YAML), or None."""
-    try:
-        read_yaml(path)
-    except ParamsFileError as exc:
-        return str(exc)
-    return None
+class RosArgumentsError(NfmrError):
+    """ROS arguments that rclpy refuses to start with."""
 
 
 def run_node(prog: str, factory, args=None) -> int:
-    """Create the node with ``factory()``, call its ``start()``, spin until shutdown."""
-    argv = sys.argv if args is None else args
-    for path in params_files(list(argv)):
-        problem = check_params_file(path)
-        if problem:
-            print(f'{prog}: {problem}', file=sys.stderr)
-            return 2
+    """
+    Create the node with ``factory()``, call its ``start()``, spin until shutdown.
+
+    Parameters
+    ----------
+    prog : str
+        The executable's name, in every line printed here.
+    factory : callable
+        ``factory() -> node`` after ``rclpy.init``; raises an NfmrError (e.g.
+        :class:`~nfmr_dlsmc.core.validation.ParameterError`) for a bad configuration.
+    args : list of str, optional
+        The command line (default ``sys.argv``).
+
+    Returns
+    -------
+    int
+        0 after a normal shutdown, 2 after a user error (one line), 1 when the node set
+        ``failure`` (printed).
+
+    """
     try:
-        rclpy.init(args=args)
-    except Exception as exc:  # rclpy reports bad ROS arguments as RCLError
-        print(f'{prog}: cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}',
-              file=sys.stderr)
-        return 2
-    try:
-        node = factory()
-    except ParameterError as exc:
-        print(f'{prog}: invalid parameter: {exc}', file=sys.stderr)
+        node = _create_node(factory, args)
+    except NfmrError as exc:
         rclpy.try_shutdown()
-        return 2
+        return report_user_error(prog, exc)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     node.start()
@@ -71,8 +72,34 @@ def run_node(prog: str, factory, args=None) -> int:
     return code
 
 
-def describe_failure(exc: BaseException) -> str:
-    """``Type: message (at package/file.py:line in function)`` of an exception."""
+def _create_node(factory, args):
+    """
+    Check the ``--params-file`` files among the ROS arguments, init rclpy, create the node.
+
+    Raises
+    ------
+    ParamsFileError
+        A parameter file is missing, unreadable or not YAML.
+    RosArgumentsError
+        rclpy refuses the ROS arguments.
+    NfmrError
+        What ``factory`` raises for a bad configuration.
+
+    """
+    argv = list(sys.argv if args is None else args)
+    for k, arg in enumerate(argv[:-1]):
+        if arg == '--params-file':
+            read_yaml(argv[k + 1])
+    try:
+        rclpy.init(args=args)
+    except Exception as exc:  # rclpy reports bad ROS arguments as RCLError
+        raise RosArgumentsError(
+            f'cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}') from None
+    return factory()
+
+
+def _describe_failure(exc: BaseException) -> str:
+    """Return ``Type: message (at package/file.py:line in function)`` of an exception."""
     where = ''
     frames = traceback.extract_tb(exc.__traceback__)
     if frames:
@@ -86,9 +113,9 @@ class LoopThread:
     A node's background loop: ``target`` runs in a daemon thread while ``running`` is set.
 
     With ``node``, a failure of the loop is fatal to the node: ``node.failure`` is set to
-    "<name> failed: <describe_failure>", it is logged as fatal and the node's context is shut
-    down, which ends :func:`run_node` with exit code 1 naming it — a node whose loop died
-    must not live on publishing nothing.
+    "<name> thread failed: <Type: message (at file:line in function)>", it is logged as
+    fatal and the node's context is shut down, which ends :func:`run_node` with exit code 1
+    naming it — a node whose loop died must not live on publishing nothing.
     """
 
     def __init__(self, target, name: str, node=None):
@@ -110,7 +137,7 @@ class LoopThread:
             self._target()
         except Exception as exc:  # any failure: the loop is what the node is for
             node = self._node
-            node.failure = f'{self._name} thread failed: {describe_failure(exc)}'
+            node.failure = f'{self._name} thread failed: {_describe_failure(exc)}'
             node.get_logger().fatal(f'{node.failure}; shutting down')
             node.context.try_shutdown()
 

@@ -1,77 +1,123 @@
-"""Declaring a node's parameters from a defaults table and reading them back (rclpy)."""
+"""
+Declaring a node's parameters from their schema and reading them back (rclpy).
 
+A :class:`SchemaNode` is created with ``automatically_declare_parameters_from_overrides``:
+rclpy then declares every value given to it (``--params-file``, ``-p``,
+``parameter_overrides``) under its own type, which is how this module learns, through
+public rclpy calls only, what was given. :func:`_declare_parameters` checks each against
+the schema (:mod:`nfmr_dlsmc.core.schema`: its name, its type) and declares it again with
+the schema's type and descriptor (description with the unit, rule, read-only flag).
+"""
+
+from nfmr_dlsmc.core.schema import Param, unknown_parameter
 from nfmr_dlsmc.core.validation import ParameterError
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.time_source import USE_SIM_TIME_NAME
+from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
+
+__all__ = ['SchemaNode', 'plain_value']
+
+#: Parameters rclpy declares on every node itself.
+_RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
+
+_ROS_TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
+              float: Parameter.Type.DOUBLE, str: Parameter.Type.STRING,
+              list: Parameter.Type.DOUBLE_ARRAY}
 
 
-def _declared_type(default):
-    if isinstance(default, bool):
-        return Parameter.Type.BOOL
-    if isinstance(default, int):
-        return Parameter.Type.INTEGER
-    if isinstance(default, float):
-        return Parameter.Type.DOUBLE
-    if isinstance(default, str):
-        return Parameter.Type.STRING
-    if isinstance(default, (list, tuple)):
-        return Parameter.Type.DOUBLE_ARRAY
-    raise TypeError(f'no ROS parameter type for {default!r}')
-
-
-def declare_parameters(node: Node, defaults: dict, read_only=(), descriptions=None) -> dict:
+class SchemaNode(Node):
     """
-    Declare every parameter of ``defaults`` (name -> default) and return the values.
+    A node whose parameters are declared from their schema, as given to it.
 
-    ``descriptions`` (name -> text) fill the descriptors that ``ros2 param describe`` shows.
+    rclpy cannot declare an empty list given in a parameter file or by ``-p`` (it arrives
+    without a type): the node refuses it as a :class:`ParameterError` instead of rclpy's
+    ValueError.
 
-    Parameters given in a ``--params-file`` override the defaults; an integer given for a
-    floating-point parameter (``k1: 1``, ``initial_pose: [1, 4, 0]``) is taken as that
-    number, as the parameter-file check of ``nfmr-run`` takes it; a value of another wrong
-    type, or a name the node does not know, raises :class:`ParameterError` naming it.
+    Attributes
+    ----------
+    parameter_values : dict
+        The value of every parameter at start, by name (:func:`_declare_parameters`).
+
     """
-    for name in node._parameter_overrides:  # names set by --params-file / -p
-        if name not in defaults and name != 'use_sim_time':
-            value = node._parameter_overrides[name].value
-            raise ParameterError(name, value, f"unknown parameter of node '{node.get_name()}'")
-    values = {}
-    for name, default in defaults.items():
-        ptype = _declared_type(default)
-        descriptor = ParameterDescriptor(name=name, type=ptype.value,
-                                         description=(descriptions or {}).get(name, ''),
-                                         read_only=name in read_only)
-        # An empty list carries no element type: declare those by type alone.
-        initial = ptype if isinstance(default, (list, tuple)) and not default else default
-        given = node._parameter_overrides.get(name)
-        widened = None if given is None else _widened(given.value, ptype)
+
+    def __init__(self, node_name: str, params: list[Param], **kwargs):
         try:
-            if widened is None:
-                param = node.declare_parameter(name, initial, descriptor)
-            else:
-                param = node.declare_parameter(name, widened, descriptor, ignore_override=True)
-        except (InvalidParameterTypeException, ParameterException) as exc:
-            shown = given.value if given is not None else None
-            raise ParameterError(name, shown, f'must be of type {ptype.name.lower()} ({exc})') from None
-        values[name] = _plain(param.value, default)
-    return values
+            super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
+                             **kwargs)
+        except ValueError as exc:
+            if 'PARAMETER_NOT_SET' not in str(exc):
+                raise
+            raise ParameterError('a parameter given to the node', [], 'must not be an empty '
+                                 'list (rclpy cannot declare one): leave it out, arrays '
+                                 'default to []') from None
+        self.parameter_values = _declare_parameters(self, params)
 
 
-def _widened(value, ptype):
-    """An integer (array) given for a double (array) parameter as floats; else None."""
-    if ptype == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(value, bool):
+def _declare_parameters(node: Node, params: list[Param]) -> dict:
+    """
+    Declare ``params`` on ``node`` and return their values by name.
+
+    ``node`` must have been created with ``automatically_declare_parameters_from_overrides``
+    (as :class:`SchemaNode` is). A given value overrides the default; an integer given for
+    a floating-point parameter (``k1: 1``, ``initial_pose: [1, 4, 0]``) is taken as that
+    number, as the parameter-file check of ``nfmr-run`` takes it; a value of another type,
+    or a name the node does not know, raises :class:`ParameterError` naming it. Each
+    descriptor carries the description with the unit (``ros2 param describe``), the rule
+    (``additional_constraints``) and the read-only flag.
+    """
+    given = {name: p for name, p in node.get_parameters_by_prefix('').items()
+             if name not in _RCLPY_PARAMETERS}
+    names = [p.name for p in params]
+    for name, parameter in given.items():
+        if name not in names:
+            raise unknown_parameter(name, plain_value(parameter.value), names,
+                                    f"node '{node.get_name()}'")
+        node.undeclare_parameter(name)  # declared again below, with the schema's type
+    return {p.name: _declare(node, p, given.get(p.name)) for p in params}
+
+
+def _declare(node: Node, param: Param, given: Parameter | None):
+    """Declare one parameter (``given`` overriding its default); return its value."""
+    ros_type = _ROS_TYPES[param.kind]
+    descriptor = ParameterDescriptor(name=param.name, type=ros_type.value,
+                                     description=param.summary,
+                                     additional_constraints=param.rule_text,
+                                     read_only=param.read_only)
+    value = param.default if given is None else _as_type(param.name, given, ros_type)
+    if isinstance(value, list) and not value:
+        # An empty array carries no element type: declare it by type alone, unset.
+        declared = node.declare_parameter(param.name, ros_type, descriptor,
+                                          ignore_override=True)
+    else:
+        declared = node.declare_parameter(param.name, value, descriptor, ignore_override=True)
+    return list(param.default) if declared.value is None else plain_value(declared.value)
+
+
+def _as_type(name: str, given: Parameter, ros_type: Parameter.Type):
+    """
+    Return the value of ``given`` as ``ros_type``: integers widened to floats.
+
+    Raises
+    ------
+    ParameterError
+        For a value of another type.
+
+    """
+    value = plain_value(given.value)
+    if given.type_ == ros_type:
+        return value
+    if ros_type == Parameter.Type.DOUBLE and given.type_ == Parameter.Type.INTEGER:
         return float(value)
-    if ptype == Parameter.Type.DOUBLE_ARRAY and isinstance(value, (list, tuple)) and value \
-            and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-        return [float(v) for v in value]
-    return None
+    if ros_type == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
+            isinstance(v, int) and not isinstance(v, bool) for v in value):
+        return [float(v) for v in value]  # also [], which rclpy types as a byte array
+    raise ParameterError(name, value, f'must be of type {ros_type.name.lower()}')
 
 
-def _plain(value, default):
-    """Rclpy values -> plain Python: arrays as lists, an unset array as the default."""
-    if value is None:
-        return list(default)
+def plain_value(value):
+    """Return an rclpy parameter value as plain Python: arrays as lists."""
     if hasattr(value, 'tolist'):
         return value.tolist()
     return list(value) if isinstance(value, (tuple, list)) else value

@@ -1,9 +1,12 @@
-"""``nfmr-replay``: republish a rosbag2 MCAP bag's recorded bytes with their original timing."""
+"""
+The replay of ``nfmr-replay``: a bag's recorded bytes republished with their timing.
 
-import argparse
+:func:`replay` republishes a rosbag2 MCAP bag as it was recorded, on a node of its own;
+the command line is :mod:`nfmr_dlsmc.cli.replay`.
+"""
+
 from dataclasses import dataclass
 from pathlib import Path
-import signal
 import sys
 import time
 
@@ -23,12 +26,13 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 import yaml
 
-CLOCK_PERIOD_NS = 1_000_000  # /clock from bag time at most every 1 ms of bag time
+#: /clock from bag time at most every this much bag time [ns].
+CLOCK_PERIOD_NS = 1_000_000
 
 
 def _policy(enum, value, usable, default):
     """
-    A rosbag2 policy value as a member of ``enum``.
+    Return a rosbag2 policy value as a member of ``enum``.
 
     Parameters
     ----------
@@ -55,9 +59,11 @@ def _policy(enum, value, usable, default):
 
 def _duration(value) -> Duration:
     """
-    A recorded ``{sec, nsec}`` as an rclpy Duration; infinite (``RMW_DURATION_INFINITE``
-    or the Foxy-era markers, all with ``sec`` >= 2^31 - 1), zero or malformed values become
-    the rclpy default (unspecified, i.e. infinite).
+    Return a recorded ``{sec, nsec}`` as an rclpy Duration.
+
+    Infinite (``RMW_DURATION_INFINITE`` or the Foxy-era markers, all with ``sec`` >=
+    2^31 - 1), zero or malformed values become the rclpy default (unspecified, i.e.
+    infinite).
     """
     try:
         sec, nsec = int(value['sec']), int(value['nsec'])
@@ -70,7 +76,7 @@ def _duration(value) -> Duration:
 
 def publisher_qos(profile: dict) -> QoSProfile:
     """
-    The QoS to republish a topic with, from one recorded offered profile.
+    Return the QoS to republish a topic with, from one recorded offered profile.
 
     Policies a publisher can be created with are kept; the rest become defaults: history
     ``unknown`` / ``system_default`` -> KEEP_LAST; a depth < 1 (or none) -> 1000, so that
@@ -114,9 +120,10 @@ def publisher_qos(profile: dict) -> QoSProfile:
 
 def recorded_qos(metadata: dict) -> QoSProfile:
     """
-    The publisher QoS of a channel: :func:`publisher_qos` of the first profile in its
-    ``offered_qos_profiles`` (rosbag2's YAML), defaults when there is none or it is not
-    readable.
+    Return the publisher QoS of a channel.
+
+    That is :func:`publisher_qos` of the first profile in its ``offered_qos_profiles``
+    (rosbag2's YAML); defaults when there is none or it is not readable.
     """
     try:
         profiles = yaml.safe_load(metadata.get('offered_qos_profiles') or '[]')
@@ -126,30 +133,48 @@ def recorded_qos(metadata: dict) -> QoSProfile:
     return publisher_qos(first if isinstance(first, dict) else {})
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog='nfmr-replay', description=__doc__)
-    parser.add_argument('bag', type=Path, help='bag directory or .mcap file')
-    parser.add_argument('--rate', type=float, default=1.0, help='speed factor (default 1)')
-    parser.add_argument('--loop', action='store_true', help='start over at the end')
-    parser.add_argument('--topics', nargs='+', metavar='T', help='replay only these topics')
-    parser.add_argument('--start-offset', type=float, default=0.0, metavar='S',
-                        help='skip the first S seconds of the bag')
-    parser.add_argument('--clock', action='store_true',
-                        help='publish /clock from bag time (the recorded /clock is skipped)')
-    parser.add_argument('--delay', type=float, default=1.0, metavar='S',
-                        help='wait S seconds after creating publishers, for discovery')
-    return parser
+@dataclass(frozen=True)
+class ReplayOptions:
+    """
+    What ``nfmr-replay`` is asked for: its command line.
+
+    Attributes
+    ----------
+    bag : Path
+        Bag directory or .mcap file.
+    rate : float
+        Speed factor.
+    loop : bool
+        Start over at the end.
+    topics : list of str or None
+        Replay only these topics (None: all).
+    start_offset : float
+        Skip the first seconds of the bag [s].
+    clock : bool
+        Publish /clock from bag time (the recorded /clock is skipped).
+    delay : float
+        Wait after creating the publishers, for discovery [s].
+
+    """
+
+    bag: Path
+    rate: float
+    loop: bool
+    topics: list | None
+    start_offset: float
+    clock: bool
+    delay: float
 
 
-def wanted(args, topic: str) -> bool:
-    """Whether the options replay ``topic`` (``--clock`` replaces the recorded /clock)."""
+def _wanted(args: ReplayOptions, topic: str) -> bool:
+    """Return whether the options replay ``topic`` (``--clock`` replaces the recorded /clock)."""
     if args.clock and topic == '/clock':
         return False
     return args.topics is None or topic in args.topics
 
 
 @dataclass
-class Scan:
+class _Scan:
     """
     A first pass over a bag: its channels and how many messages the options select.
 
@@ -172,9 +197,9 @@ class Scan:
     selected: int
 
 
-def scan(args) -> Scan:
+def _scan(args: ReplayOptions) -> _Scan:
     """
-    Read ``args.bag`` once, counting what :meth:`Replayer.play_once` would publish.
+    Read ``args.bag`` once, counting what :meth:`_Replayer.play_once` would publish.
 
     Raises
     ------
@@ -190,19 +215,21 @@ def scan(args) -> Scan:
         first = message.log_time if first is None else first
         last = message.log_time if last is None else max(last, message.log_time)
         counts[message.topic] = counts.get(message.topic, 0) + 1
-        if (wanted(args, message.topic)
+        if (_wanted(args, message.topic)
                 and message.log_time - first >= args.start_offset * 1e9):
             selected += 1
     for topic in contents.topics:
         counts.setdefault(topic, 0)
     span_s = 0.0 if first is None else (last - first) * 1e-9
-    return Scan(contents, counts, span_s, selected)
+    return _Scan(contents, counts, span_s, selected)
 
 
-def selection_error(args, found: Scan) -> str | None:
+def _selection_error(args: ReplayOptions, found: _Scan) -> str | None:
     """
-    The one-line error when the options select no message of the bag (or name a topic
-    it does not have), saying which topics it has; None when there is something to replay.
+    Return why the options select nothing to replay, or None.
+
+    The one-line error when the options select no message of the bag (or name a topic it
+    does not have) says which topics it has.
     """
     has = ', '.join(f'{topic} ({n})' for topic, n in sorted(found.counts.items()))
     missing = [topic for topic in args.topics or () if topic not in found.counts]
@@ -223,10 +250,10 @@ def selection_error(args, found: Scan) -> str | None:
             f'messages span {found.span_s:.3f} s)')
 
 
-class Replayer:
+class _Replayer:
     """Publishes a bag's messages on ``node`` at their recorded pace."""
 
-    def __init__(self, node: Node, args):
+    def __init__(self, node: Node, args: ReplayOptions):
         self.node = node
         self.args = args
         self.publishers = {}
@@ -249,10 +276,11 @@ class Replayer:
     def prepare(self, contents: BagContents) -> None:
         """Create the publishers of every replayed channel of ``contents`` up front."""
         for topic, (type_name, metadata) in contents.topics.items():
-            if wanted(self.args, topic):
+            if _wanted(self.args, topic):
                 self._publisher(topic, type_name, metadata)
 
     def play_once(self, path, duration_s: float | None) -> BagContents:
+        """Publish the selected messages of the bag once, at their pace; return its contents."""
         args = self.args
         contents = BagContents(path=Path(path))
         start_wall = None
@@ -263,7 +291,7 @@ class Replayer:
             if first is None:
                 first = message.log_time
             if (message.log_time - first < args.start_offset * 1e9
-                    or not wanted(args, message.topic)):
+                    or not _wanted(args, message.topic)):
                 continue
             if start_wall is None:
                 start_wall = time.monotonic()
@@ -294,8 +322,8 @@ class Replayer:
         return contents
 
 
-def bag_duration(path) -> float | None:
-    """The duration [s] that metadata.yaml gives, if there is one."""
+def _bag_duration(path) -> float | None:
+    """Return the duration [s] that metadata.yaml gives, if there is one."""
     meta = mcap_file(path).parent / 'metadata.yaml'
     try:
         info = yaml.safe_load(meta.read_text())['rosbag2_bagfile_information']
@@ -304,36 +332,35 @@ def bag_duration(path) -> float | None:
         return None
 
 
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt
-
-
-def replay(args) -> int:
+def replay(args: ReplayOptions) -> int:
     """
-    Check what the options select, then publish it; returns the exit status (0, 2 when
-    nothing is selected, 130 when interrupted while publishing).
+    Check what the options select, then publish it.
+
+    Returns
+    -------
+    int
+        The exit status: 0, or 130 when interrupted while publishing.
 
     Raises
     ------
     BagError
-        The bag cannot be read.
+        The bag cannot be read, or the options select nothing of it.
     KeyboardInterrupt
         Ctrl-C or SIGTERM before publishing began.
 
     """
-    found = scan(args)
-    problem = selection_error(args, found)
+    found = _scan(args)
+    problem = _selection_error(args, found)
     if problem:
-        print(f'nfmr-replay: error: {problem}', file=sys.stderr)
-        return 2
+        raise BagError(problem)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = Node('replay')
-    replayer = Replayer(node, args)
+    replayer = _Replayer(node, args)
     status = 0
     try:
         replayer.prepare(found.contents)
         time.sleep(args.delay)
-        duration = bag_duration(args.bag)
+        duration = _bag_duration(args.bag)
         while True:
             contents = replayer.play_once(args.bag, duration)
             if contents.truncated:
@@ -349,31 +376,3 @@ def replay(args) -> int:
         rclpy.try_shutdown()
     print(f'{replayer.published} messages replayed', file=sys.stderr)
     return status
-
-
-def main(argv=None) -> int:
-    """
-    Entry point of ``nfmr-replay``: exit 0, 2 on a bad option or bag, 130 on Ctrl-C or
-    SIGTERM.
-    """
-    args = build_parser().parse_args(argv)
-    if not args.rate > 0.0:
-        print(f'nfmr-replay: error: --rate must be > 0, got {args.rate}', file=sys.stderr)
-        return 2
-    if args.start_offset < 0.0:
-        print(f'nfmr-replay: error: --start-offset must be >= 0, got {args.start_offset}',
-              file=sys.stderr)
-        return 2
-    signal.signal(signal.SIGTERM, _interrupt)
-    try:
-        return replay(args)
-    except BagError as exc:
-        print(f'nfmr-replay: error: {exc}', file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print('nfmr-replay: interrupted', file=sys.stderr)
-        return 130
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,27 +1,25 @@
 """Metrics and plots of recorded runs, from their ``controller_state`` topic."""
 
-
 from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use('Agg')
-import matplotlib.pyplot as plt  # noqa: E402
-from nfmr_dlsmc.bag.reader import BagContents, BagError  # noqa: E402
-from nfmr_dlsmc.core.metrics import (  # noqa: E402
+import matplotlib.pyplot as plt
+from nfmr_dlsmc.bag.reader import BagContents, BagError
+from nfmr_dlsmc.core.metrics import (
     format_metric,
     HOLD_FROM,
     HOLD_ROWS,
+    metric_rows,
     sample_durations,
     tracking_metrics,
     TrackingMetrics,
 )
-from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS  # noqa: E402
-import numpy as np  # noqa: E402
-from rclpy.serialization import deserialize_message  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
-from std_msgs.msg import Float64MultiArray  # noqa: E402
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS
+import numpy as np
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 
 STATE_TOPIC = '/controller_state'
 JOINT_TOPIC = '/joint_states'
@@ -34,7 +32,7 @@ NEEDED_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_d', 'theta_r', 'th
 
 def state_series(contents: BagContents) -> dict:
     """
-    The ``controller_state`` messages of a read bag as arrays keyed by field name.
+    Return the ``controller_state`` messages of a read bag as arrays keyed by field name.
 
     The field names come from the messages' layout label (``t,x,y,...``), else
     :data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`.
@@ -69,8 +67,10 @@ def state_series(contents: BagContents) -> dict:
 
 def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
     """
-    (stamps [s], steer joint velocities (N, 4) [rad/s]) from the bag's ``/joint_states``
-    (joints named ``*_steer``, in the order FL FR RL RR), or None if it has none.
+    Return (stamps [s], steer joint velocities (N, 4) [rad/s]) of the bag's joint states.
+
+    From ``/joint_states``, the joints named ``*_steer`` in the order FL FR RL RR; None if
+    the bag has none.
     """
     stamps, rates = [], []
     for message in contents.of(JOINT_TOPIC):
@@ -88,10 +88,10 @@ def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | 
 def state_metrics(series: dict, hold_from: float = HOLD_FROM,
                   joint_rates: tuple | None = None) -> TrackingMetrics:
     """
-    :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the tracking ticks of a run, each
-    weighted by its own duration (ticks where safety stopped the robot are left out).
+    Return the :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the ticks of a run.
 
-    The hold figures use the state's saturation flags and steer angles (bags recorded
+    Each tick is weighted by its own duration; ticks where safety stopped the robot are
+    left out. The hold figures use the state's saturation flags and steer angles (bags recorded
     before the state carried them have no steer figure) and, with ``joint_rates`` from
     :func:`steer_joint_rates`, the measured steer joint rates stamped at or after
     ``hold_from`` (sim time, which starts with trajectory time within a step).
@@ -123,8 +123,15 @@ def plot_runs(runs: list, out_dir: Path) -> list[Path]:
         reference is drawn from the first run. Series with steer_fl ... steer_rr add
         ``steering.png``.
     out_dir : Path
+        Where the PNGs go (created if missing).
+
+    Returns
+    -------
+    list of Path
+        The files written.
 
     """
+    matplotlib.use('Agg')
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     colours = plt.rcParams['axes.prop_cycle'].by_key()['color']
@@ -186,19 +193,16 @@ def plot_runs(runs: list, out_dir: Path) -> list[Path]:
 
 
 #: Rows of the metrics table: (label, TrackingMetrics field).
-TABLE_ROWS = (('IAE of distance [m*s]', 'iae'), ('ISE of distance [m^2*s]', 'ise'),
-              ('STD of distance [m]', 'std'), ('convergence time (1 mm) [s]', 't_conv'),
-              ('final distance [m]', 'final_distance'),
-              ('max |theta_e| after t_conv [rad]', 'max_abs_theta_e_after_conv'),
-              ('IAE of theta_e [rad*s]', 'theta_e_iae'), ('max v [m/s]', 'max_v'),
-              ('max |omega| [rad/s]', 'max_abs_omega'),
-              ('convergence time (1 cm) [s]', 't_conv_1cm')) + HOLD_ROWS
+TABLE_ROWS = metric_rows(('iae', 'ise', 'std', 't_conv', 'final_distance',
+                          'max_abs_theta_e_after_conv', 'theta_e_iae', 'max_v',
+                          'max_abs_omega', 't_conv_1cm')) + HOLD_ROWS
 
 
 def metrics_table(columns: list) -> str:
     """
-    A text table, one column per (label, TrackingMetrics); the hold rows cover
-    t >= the first column's ``hold_from``.
+    Return a text table, one column per (label, TrackingMetrics).
+
+    The hold rows cover t >= the first column's ``hold_from``.
     """
     width = max([12] + [len(label) for label, _ in columns])
     hold_from = columns[0][1].hold_from if columns else HOLD_FROM

@@ -50,13 +50,13 @@ class LoopStats:
         self._compute = []
 
     def record(self, start: float, compute: float) -> None:
-        """A tick started at ``start`` [s, monotonic] and took ``compute`` [s]."""
+        """Record a tick that started at ``start`` [s, monotonic] and took ``compute`` [s]."""
         self._starts.append(start)
         self._compute.append(compute)
 
     def take(self) -> LoopFigures | None:
         """
-        Figures of the ticks since the last call (None with fewer than 2 ticks).
+        Return the figures of the ticks since the last call (None with fewer than 2 ticks).
 
         The last tick is kept as the first of the next window so no interval is lost.
         """

@@ -107,11 +107,11 @@ class TrackingSession:
 
     @property
     def started(self) -> bool:
-        """Whether valid odometry has arrived (trajectory time is running)."""
+        """Tell whether valid odometry has arrived (trajectory time is running)."""
         return self._t0 is not None
 
     def set_params(self, params: ControllerParams) -> None:
-        """New gains or limits; they take effect at the next tick."""
+        """Take new gains or limits; they take effect at the next tick."""
         self.params = params
         self.controller.config = params.dlsmc
 
@@ -119,8 +119,9 @@ class TrackingSession:
                     control_time: float, stamp: float | None = None,
                     frame_id: str | None = None) -> bool:
         """
-        Odometry of P arrived: pose [m, m, rad], its ``stamp`` and ``frame_id``, received
-        at ``wall_time`` / ``control_time`` [s].
+        Take odometry of P: pose [m, m, rad], ``stamp`` and ``frame_id``.
+
+        It was received at ``wall_time`` / ``control_time`` [s].
 
         Returns
         -------
@@ -178,7 +179,7 @@ class TrackingSession:
         return len(base) >= self.confirm_messages
 
     def _restart(self) -> None:
-        """The odometry source started over: so does tracking."""
+        """Start tracking over: the odometry source started over."""
         self.controller.reset()
         self._pose = self._t0 = None
         self._t = 0.0
@@ -187,11 +188,11 @@ class TrackingSession:
         self.restarts += 1
 
     def odometry_age(self, wall_time: float) -> float:
-        """Wall time [s] since the latest valid odometry (inf before any)."""
+        """Return the wall time [s] since the latest valid odometry (inf before any)."""
         return math.inf if self._pose_wall is None else wall_time - self._pose_wall
 
     def _fault(self, wall_time: float) -> tuple | None:
-        """(kind, reason) of what stops the robot now, or None."""
+        """Return (kind, reason) of what stops the robot now, or None."""
         if self._bad_odometry is not None:
             return self._bad_odometry
         age = self.odometry_age(wall_time)
@@ -200,7 +201,7 @@ class TrackingSession:
         return None
 
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
-        """The command for this tick, or None before the first valid odometry."""
+        """Return the command for this tick, or None before the first valid odometry."""
         if self._t0 is None:
             return None
         fault = self._fault(wall_time)

@@ -1,6 +1,7 @@
 """
-Worker processes for the commands that spread runs over the cores, stopped at once on
-Ctrl-C or SIGTERM instead of finishing every queued run first.
+Worker processes for the commands that spread runs over the cores.
+
+They stop at once on Ctrl-C or SIGTERM instead of finishing every queued run first.
 """
 
 from concurrent.futures import ProcessPoolExecutor
@@ -10,7 +11,7 @@ from contextlib import contextmanager
 @contextmanager
 def worker_pool(jobs: int, initializer=None):
     """
-    A :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes.
+    Run a :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes.
 
     Leaving the block normally waits for the pool as usual; leaving it by an exception
     (KeyboardInterrupt included) cancels the queued runs and terminates the workers, so

@@ -8,15 +8,16 @@ from nfmr_sim.world import PlanarState
 
 
 def time_message(seconds: float) -> Time:
-    """Simulated time [s] -> builtin_interfaces/Time via integer nanoseconds."""
+    """Convert simulated time [s] to builtin_interfaces/Time via integer nanoseconds."""
     nanoseconds = int(round(seconds * 1e9))
     return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
 def odometry_message(state: PlanarState, stamp: Time) -> Odometry:
     """
-    Planar state of P -> nav_msgs/Odometry (frame ``odom``, child ``base_link``;
-    twist in the child frame, REP 105).
+    Convert the planar state of P to nav_msgs/Odometry.
+
+    Frame ``odom``, child ``base_link``; the twist in the child frame (REP 105).
     """
     msg = Odometry()
     msg.header.stamp = stamp

@@ -10,11 +10,12 @@ physics step; ``joint_states``, ``ground_truth`` (true odometry of P) and
 out-of-limit commands (see :mod:`nfmr_sim.command_gate`), or missing ones, brake the
 wheels; the reason is logged once.
 
-Parameters in ``LIVE_PARAMETERS`` may be changed while the sim runs: a change is validated
-as a whole through :func:`sim_settings` and applied at the next physics step. The others
-are read-only (the world is built from them); setting one is refused with "read-only:
-restart the sim". A failure of the stepping thread is fatal: it is logged, the node shuts
-down and ``sim`` exits with code 1 naming the error.
+The parameters their schema does not mark read-only
+(:func:`~nfmr_sim.sim_params.sim_parameters`) may be changed while the sim runs: a change
+is validated as a whole through :func:`sim_settings` and applied at the next physics step.
+The others are read-only (the world is built from them); setting one is refused with
+"read-only: restart the sim". A failure of the stepping thread is fatal: it is logged, the
+node shuts down and ``sim`` exits with code 1 naming the error.
 """
 
 import sys
@@ -23,52 +24,36 @@ import time
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from nfmr_dlsmc.core.steering import RobotGeometry
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
-from nfmr_dlsmc.ros.parameters import declare_parameters
+from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
 from nfmr_sim.ros.messages import odometry_message, time_message
-from nfmr_sim.sim_params import sim_parameter_defaults, sim_parameter_descriptions, sim_settings
+from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64MultiArray
 
-# What the step thread re-reads or hands on at every step (the world reads its disturbance
-# config every step; odom_latency_steps and seed only at reset, so those are read-only).
-LIVE_PARAMETERS = ('lockstep_timeout', 'command_timeout', 'aux_publish_every', 'max_time',
-                   'motors.max_wheel_speed', 'disturbance.constant_force_x',
-                   'disturbance.constant_force_y', 'disturbance.odom_position_noise',
-                   'disturbance.odom_yaw_noise', 'disturbance.pulses')
 
-
-def _plain(value):
-    """A parameter value as plain Python (arrays as lists)."""
-    return value.tolist() if hasattr(value, 'tolist') else value
-
-
-class SimNode(Node):
+class SimNode(SchemaNode):
     """The simulated 4WIS robot. ``start()`` launches the stepping thread."""
 
     def __init__(self, **kwargs):
-        super().__init__('sim', **kwargs)
-        defaults = sim_parameter_defaults()
-        read_only = [name for name in defaults if name not in LIVE_PARAMETERS]
-        self._values = declare_parameters(self, defaults, read_only,
-                                          sim_parameter_descriptions())
+        params = sim_parameters()
+        # Live ones are what the step thread re-reads or hands on at every step.
+        self._read_only = {p.name for p in params if p.read_only}
+        super().__init__('sim', params, **kwargs)
+        self._values = self.parameter_values
         self.settings = sim_settings(self._values)
         world_cfg = self.settings.world
         self.world = ChassisWorld(world_cfg, gui=self.settings.gui)
         self.world.reset(self.settings.initial_pose)
-        chassis = world_cfg.chassis
-        geometry = RobotGeometry(chassis.wheelbase, chassis.track, chassis.wheel_radius,
-                                 chassis.steer_limit)
-        self.gate = CommandGate(self.settings.command_timeout, geometry,
-                                world_cfg.tracked_point_offset, self.settings.max_wheel_speed)
+        self.gate = CommandGate(self.settings.command_timeout, world_cfg.chassis,
+                                world_cfg.tracked_point_offset,
+                                world_cfg.motors.max_wheel_speed)
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, '/clock', reliable)
         self._odom_pub = self.create_publisher(Odometry, 'odom', reliable)
@@ -101,9 +86,9 @@ class SimNode(Node):
         rclpy refuses them too, before any on-set callback, but names no remedy.
         """
         for param in parameter_list:
-            if param.name in self._values and param.name not in LIVE_PARAMETERS:
+            if param.name in self._read_only:
                 return SetParametersResult(
-                    successful=False, reason=f'{param.name} = {_plain(param.value)!r}: '
+                    successful=False, reason=f'{param.name} = {plain_value(param.value)!r}: '
                                              f'read-only: restart the sim to change it')
         return super().set_parameters_atomically(parameter_list)
 
@@ -114,7 +99,7 @@ class SimNode(Node):
     def _on_set_parameters(self, changes) -> SetParametersResult:
         """Validate a live change through :func:`sim_settings`; apply it at the next step."""
         candidate = dict(self._values)
-        candidate.update({p.name: _plain(p.value) for p in changes if p.name in candidate})
+        candidate.update({p.name: plain_value(p.value) for p in changes if p.name in candidate})
         try:
             settings = sim_settings(candidate)
         except ParameterError as exc:
@@ -130,8 +115,10 @@ class SimNode(Node):
             pending, self._pending = self._pending, None
         if pending is None:
             return
-        self.gate.configure(pending.command_timeout, pending.max_wheel_speed)
-        self.world.config = pending.world  # differs in live disturbance.* values only
+        self.gate.configure(pending.command_timeout, pending.world.motors.max_wheel_speed)
+        # Differs in live values only: disturbance.* the world reads at every step, and
+        # motors.max_wheel_speed, which the gate applies.
+        self.world.config = pending.world
         self.settings = pending
 
     # -- stepping ---------------------------------------------------------------------------

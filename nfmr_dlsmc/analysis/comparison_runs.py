@@ -1,0 +1,127 @@
+"""
+The runs of the comparison (``nfmr-compare``): every controller on every scenario.
+
+They are spread over worker processes; each gives its metrics and its decimated series.
+"""
+
+from concurrent.futures import as_completed
+from dataclasses import replace
+
+from nfmr_dlsmc.analysis.comparison_metrics import run_metrics
+from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario, SCENARIOS
+from nfmr_dlsmc.analysis.run_setup import quiet_stdout
+from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.gains import InputLimits
+from nfmr_dlsmc.runtime.params import load_gain_blocks
+from nfmr_dlsmc.runtime.worker_pool import worker_pool
+import numpy as np
+
+#: Samples per plotted point (10 ms at the 1 ms period); omega is kept as the min / max
+#: of each block so chattering stays visible.
+DECIMATION = 10
+#: (C1, C2) pairs of the DLSMC for Fig. 13 [m/s].
+C_RATIOS = ((0.6, 0.2), (0.6, 0.4), (0.6, 0.6), (0.4, 0.6), (0.2, 0.6))
+
+
+def checked_gain_blocks(path, names) -> dict:
+    """
+    Return the gain blocks of a comparison gains file, every controller of ``names`` built.
+
+    Raises
+    ------
+    ParameterError
+        The file cannot be read, or a gain of one of ``names`` is invalid: before any run.
+
+    """
+    blocks = load_gain_blocks(path)
+    for name in names:
+        build_controller(name, blocks.get(name))
+    return blocks
+
+
+def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
+                     duration: float = CASE1_LONGITUDINAL.duration) -> list[tuple]:
+    """
+    Return every (scenario, controller) run of ``duration`` [s] on ``plant``.
+
+    On the kinematic plant the DLSMC C1:C2 runs of Fig. 13 follow (the paper's kinematic
+    figure; left out on pybullet). A task is (key, name, block, scenario, plant), its key
+    (case, start, controller or "C1:C2").
+    """
+    scenarios = [replace(s, duration=duration) for s in SCENARIOS]
+    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant)
+             for s in scenarios for name in names]
+    if plant != 'kinematic':
+        return tasks
+    base = blocks.get('dlsmc') or {}
+    longitudinal = replace(CASE1_LONGITUDINAL, duration=duration)
+    for c1, c2 in C_RATIOS:
+        outer = {**(base.get('outer') or {}), 'C1': c1, 'C2': c2}
+        tasks.append((('c_ratio', longitudinal.start_key, f'{c1:g}:{c2:g}'), 'dlsmc',
+                      {**base, 'outer': outer}, longitudinal, plant))
+    return tasks
+
+
+def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
+    """
+    Run ``tasks`` on ``jobs`` processes (their stdout silenced).
+
+    Returns the metrics and the decimated series of each run, keyed by task key;
+    ``progress(done, total, key)`` follows each finished run.
+    """
+    metrics, series = {}, {}
+    with worker_pool(jobs, quiet_stdout) as pool:
+        futures = [pool.submit(_run_task, task) for task in tasks]
+        for done, future in enumerate(as_completed(futures), 1):
+            key, run_metrics_, run_series = future.result()
+            metrics[key], series[key] = run_metrics_, run_series
+            if progress:
+                progress(done, len(tasks), key)
+    return metrics, series
+
+
+def _run_task(task: tuple) -> tuple:
+    """Run one task in a worker: (key, name, block, scenario, plant) -> (key, metrics, series)."""
+    key, name, block, scenario, plant = task
+    result = run_scenario(name, block, scenario, plant)
+    pulses = [p.start for p in scenario.disturbance.pulses]
+    metrics = run_metrics(result, InputLimits().omega_max, pulses)
+    return key, metrics, _plot_series(result)
+
+
+def _plot_series(result) -> dict:
+    """Return the decimated time series of one run for the figures (arrays of equal length)."""
+    telemetry = result.telemetry
+    n = len(result.t) // DECIMATION * DECIMATION
+    pick = slice(0, n, DECIMATION)
+    series = {
+        't': result.t[pick], 'x': result.state[pick, 0], 'y': result.state[pick, 1],
+        'theta': result.state[pick, 2], 'x_d': result.reference[pick, 0],
+        'y_d': result.reference[pick, 1], 'theta_r': result.theta_r[pick],
+        'x_e': telemetry['x_e'][pick], 'y_e': telemetry['y_e'][pick],
+        'distance': result.distance_error[pick], 'theta_d': telemetry['theta_d'][pick],
+        'theta_e': telemetry['theta_e'][pick], 's_y': telemetry['s_y'][pick],
+        'v': result.v[pick]}
+    series['omega_min'], series['omega_max'], series['omega_mean'] = _envelope(result.omega)
+    series['omega_raw_min'], series['omega_raw_max'], _ = _envelope(telemetry['omega_raw'])
+    return series
+
+
+def _envelope(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the min, max and mean of each block of DECIMATION samples."""
+    n = len(signal) // DECIMATION * DECIMATION
+    blocks = signal[:n].reshape(-1, DECIMATION)
+    return blocks.min(axis=1), blocks.max(axis=1), blocks.mean(axis=1)
+
+
+def results_document(metrics: dict, plant: str) -> dict:
+    """
+    Return ``results.json``'s document.
+
+    ``"plant"`` -> the plant's name, and case -> start -> controller -> metrics (the C1:C2
+    runs under ``c_ratio`` -> start -> "C1:C2").
+    """
+    document = {'plant': plant}
+    for (case, start, name), values in metrics.items():
+        document.setdefault(case, {}).setdefault(start, {})[name] = values
+    return document

@@ -1,0 +1,227 @@
+"""
+One tracking scenario and its metrics, as ``nfmr-eval`` runs it.
+
+The DLSMC (gains from a parameter file) or a comparison controller (gains from a
+comparison gains file), on the kinematic model (3) or the pybullet chassis in this
+process.
+"""
+
+from dataclasses import dataclass
+import time
+
+from nfmr_dlsmc.analysis.run_setup import pybullet_world
+from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.disturbances import disturbance_by_name
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.metrics import format_metric, HOLD_ROWS, simulation_metrics
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
+from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.runtime.params import (
+    controller_params,
+    ControllerParams,
+    load_gain_blocks,
+    load_params_file,
+)
+from nfmr_dlsmc.runtime.share import shipped_config
+
+#: Table 2, DLSMC row, and section 4.2 (Case 1, x0 = (1, 4, 0)).
+PAPER_CASE1 = {'iae': 13.5757, 'ise': 37.1057, 'std': 0.5938, 't_conv': 7.1}
+#: The rows of :func:`format_table`: (label, metrics key).
+_TABLE_ROWS = (
+    ('IAE of distance [m*s]', 'iae'), ('ISE of distance [m^2*s]', 'ise'),
+    ('STD of distance [m]', 'std'), ('convergence time (1 mm) [s]', 't_conv'),
+    ('final distance [m]', 'final_distance'), ('max v [m/s]', 'max_v'),
+    ('max |omega| [rad/s]', 'max_abs_omega'), ('IAE of theta_e [rad*s]', 'theta_e_iae'),
+    ('max |theta_e| after t_conv [rad]', 'max_abs_theta_e_after_conv'),
+    ('IAE of theta - theta_r [rad*s]', 'theta_r_iae'),
+    ('omega total variation after t_conv [rad/s^2]', 'omega_tv_after_conv'),
+    ('convergence time (1 cm) [s]', 't_conv_1cm'), *HOLD_ROWS)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """
+    One scenario, loaded and checked, ready to run.
+
+    Attributes
+    ----------
+    plant : str
+        ``'kinematic'`` or ``'pybullet'``.
+    controller_name : str
+        A name of :data:`~nfmr_dlsmc.baselines.registry.CONTROLLER_NAMES`.
+    controller : object
+        That controller, built.
+    params : ControllerParams
+        The controller parameters (period, limits, geometry, steering mode).
+    trajectory : object
+        The reference.
+    world : object or None
+        The pybullet world configuration; None on the kinematic plant.
+    x0 : tuple of 3 floats
+        Initial pose (x [m], y [m], theta [rad]).
+    duration : float
+        [s]
+    disturbance : str
+        ``'none'`` or ``'paper'``.
+
+    """
+
+    plant: str
+    controller_name: str
+    controller: object
+    params: ControllerParams
+    trajectory: object
+    world: object
+    x0: tuple
+    duration: float
+    disturbance: str
+
+
+def load_evaluation(plant: str, controller_name: str, x0, duration: float, disturbance: str,
+                    params_file=None, gains_file=None, dt: float | None = None,
+                    trajectory_name: str | None = None) -> Evaluation:
+    """
+    Load and check one scenario; nothing is simulated yet.
+
+    Parameters
+    ----------
+    plant, controller_name, x0, duration, disturbance
+        As in :class:`Evaluation`.
+    params_file : str or Path, optional
+        Controller parameter file (ROS 2 layout, node ``controller``); on pybullet its
+        ``sim`` section builds the world.
+    gains_file : str or Path, optional
+        Comparison gains file of a controller other than the DLSMC (default the shipped
+        ``config/comparison.yaml``).
+    dt : float, optional
+        Control period [s] instead of the file's ``1/control_rate``.
+    trajectory_name : str, optional
+        A reference with its default parameters instead of the file's trajectory.
+
+    Raises
+    ------
+    ParameterError
+        A bad parameter or gain, or a pybullet world whose ``physics_dt`` is not ``dt``.
+    ParamsFileError
+        The parameter file cannot be read.
+
+    """
+    flat = load_params_file(params_file) if params_file else {}
+    if dt is not None:
+        flat['control_rate'] = 1.0 / dt
+    params = controller_params(flat)
+    trajectory = (params.trajectory if trajectory_name is None
+                  else make_trajectory(trajectory_name))
+    if controller_name == 'dlsmc':
+        controller = DlsmcController(params.dlsmc)
+    else:
+        blocks = load_gain_blocks(gains_file or shipped_config('comparison.yaml'))
+        controller = build_controller(controller_name, blocks.get(controller_name),
+                                      params.dlsmc.limits, params.dlsmc.dt)
+    world = pybullet_world(params_file, params.dlsmc.dt) if plant == 'pybullet' else None
+    return Evaluation(plant, controller_name, controller, params, trajectory, world,
+                      tuple(x0), duration, disturbance)
+
+
+def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,
+              duration: float, world=None, disturbance=None, progress=None):
+    """
+    Run ``controller`` on ``plant`` in this process.
+
+    Parameters
+    ----------
+    plant : str
+        ``'kinematic'``: the model (3), forward Euler at the controller's period, the
+        result with the steer angles the wheel mapping would command; ``'pybullet'``: the
+        chassis of ``world``.
+    controller, params, trajectory, x0, duration
+        As in :class:`Evaluation`.
+    world : object, optional
+        The pybullet world configuration (pybullet only).
+    disturbance : YawRateDisturbance, optional
+        Added to the commanded yaw rate.
+    progress : callable, optional
+        ``progress(t)`` with the simulated time [s] (pybullet only).
+
+    Returns
+    -------
+    SimResult
+
+    """
+    if plant == 'pybullet':
+        return robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
+                                                params.geometry, params.steering,
+                                                disturbance, progress)
+    run = simulate(controller, trajectory, x0, duration, params.dlsmc.dt, disturbance)
+    return with_steer_angles(run, params.geometry, params.steering)
+
+
+def evaluate(evaluation: Evaluation, hold_from: float,
+             progress=None) -> tuple[dict, float]:
+    """
+    Run the scenario and measure it.
+
+    Parameters
+    ----------
+    evaluation : Evaluation
+        The scenario of :func:`load_evaluation`.
+    hold_from : float
+        Start of the window of the hold figures [s].
+    progress : callable, optional
+        ``progress(t)`` with the simulated time [s] (pybullet only).
+
+    Returns
+    -------
+    dict
+        The metrics (:meth:`TrackingMetrics.as_dict`) and under ``'scenario'`` what ran:
+        controller, plant, trajectory, x0, duration, dt, disturbance, steps, cpu_s.
+    float
+        The CPU time of the run [s].
+
+    """
+    dt = evaluation.params.dlsmc.dt
+    start = time.process_time()
+    sim = plant_run(evaluation.plant, evaluation.controller, evaluation.params,
+                    evaluation.trajectory, evaluation.x0, evaluation.duration,
+                    evaluation.world, disturbance_by_name(evaluation.disturbance), progress)
+    cpu_s = time.process_time() - start
+    result = simulation_metrics(sim, hold_from).as_dict()
+    result['scenario'] = {
+        'controller': evaluation.controller_name, 'plant': evaluation.plant,
+        'trajectory': type(evaluation.trajectory).__name__.lower(),
+        'x0': list(evaluation.x0), 'duration': evaluation.duration, 'dt': dt,
+        'disturbance': evaluation.disturbance, 'steps': len(sim.t),
+        'cpu_s': round(cpu_s, 4)}
+    return result, cpu_s
+
+
+def paper_values(evaluation: Evaluation) -> dict | None:
+    """Return :data:`PAPER_CASE1` when ``evaluation`` is the paper's Case 1, else None."""
+    case1 = (evaluation.plant == 'kinematic' and evaluation.controller_name == 'dlsmc'
+             and evaluation.disturbance == 'none' and evaluation.x0 == (1.0, 4.0, 0.0)
+             and evaluation.duration == 100.0 and evaluation.params == ControllerParams()
+             and evaluation.trajectory == make_trajectory('sine'))
+    return PAPER_CASE1 if case1 else None
+
+
+def format_table(result: dict, paper: dict | None) -> str:
+    """Return a readable metrics table; with ``paper``, the published values beside ours."""
+    scenario = result['scenario']
+    lines = [f"{scenario['controller']} on the {scenario['plant']} plant, "
+             f"'{scenario['trajectory']}' from x0 = "
+             f"({', '.join(f'{v:g}' for v in scenario['x0'])}), {scenario['duration']:g} s, "
+             f"dt = {scenario['dt']:g} s, disturbance: {scenario['disturbance']}; "
+             f"hold: after {result['hold_from']:g} s"]
+    header = f"{'metric':<46} {'nfmr':>12}"
+    if paper:
+        header += f" {'paper':>10} {'diff':>8}"
+    lines += [header, '-' * len(header)]
+    for label, key in _TABLE_ROWS:
+        value = result[key]
+        line = f'{label:<46} {format_metric(value):>12}'
+        if paper and key in paper:
+            diff = '' if value is None else f'{100.0 * (value - paper[key]) / paper[key]:+.1f}%'
+            line += f' {paper[key]:>10.4f} {diff:>8}'
+        lines.append(line)
+    return '\n'.join(lines)

@@ -1,0 +1,90 @@
+"""
+What the commands that simulate share.
+
+The pybullet world a parameter file describes, random starts around a trajectory's
+start, and worker processes with a quiet stdout.
+"""
+
+import math
+import os
+
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.runtime.params import load_params_file
+import numpy as np
+
+
+def pybullet_world(params_file, dt: float):
+    """
+    Return the pybullet chassis's world configuration for a controller of period ``dt``.
+
+    Parameters
+    ----------
+    params_file : str or Path or None
+        Parameter file whose ``sim`` section builds the world (None: the defaults).
+    dt : float
+        The controller's period [s]; the plant steps the controller once per physics
+        step, so the world's ``physics_dt`` must equal it.
+
+    Returns
+    -------
+    WorldConfig
+        ``.world`` of the plant's settings.
+
+    Raises
+    ------
+    ParameterError
+        A bad ``sim`` parameter, or ``physics_dt`` differs from ``dt``.
+    ParamsFileError
+        The file cannot be read.
+
+    """
+    flat = load_params_file(params_file, 'sim') if params_file else {}
+    world = robot_plant('pybullet').settings(flat).world
+    if world.physics_dt != dt:
+        raise ParameterError('physics_dt', world.physics_dt,
+                             f'must equal the control period {dt:g} s: the pybullet plant '
+                             'steps the controller once per physics step', 's')
+    return world
+
+
+def start_pose(trajectory) -> np.ndarray:
+    """Return where ``trajectory`` starts: x_d [m], y_d [m] and its heading [rad] at t = 0."""
+    x_d0, y_d0, xdot0, ydot0 = (float(v) for v in trajectory.sample(0.0))
+    return np.array([x_d0, y_d0, math.atan2(ydot0, xdot0)])
+
+
+def random_starts(rng: np.random.Generator, origin: np.ndarray, half_range, n: int):
+    """
+    Return ``n`` poses drawn uniformly within +-``half_range`` around ``origin``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The generator drawn from.
+    origin : numpy.ndarray
+        (x [m], y [m], theta [rad]).
+    half_range : sequence of 3 floats
+        (dx [m], dy [m], dtheta [rad]).
+    n : int
+        How many poses.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n, 3).
+
+    """
+    return origin + rng.uniform(-1.0, 1.0, (n, 3)) * np.asarray(half_range)
+
+
+def quiet_stdout() -> None:
+    """
+    Point this process's file descriptor 1 at /dev/null.
+
+    The initializer of worker processes: a worker's pybullet prints its build time and
+    argv on stdout, where the commands print only their results.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)

@@ -1,0 +1,51 @@
+"""
+``nfmr-replay``: republish a rosbag2 MCAP bag's recorded bytes with their original timing.
+
+The replay itself is :mod:`nfmr_dlsmc.ros.replay`'s.
+"""
+
+import argparse
+from pathlib import Path
+import sys
+
+from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
+from nfmr_dlsmc.ros.replay import replay, ReplayOptions
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(prog='nfmr-replay',
+                           description="Republish a rosbag2 MCAP bag's recorded bytes with "
+                                       'their original timing.')
+    parser.add_argument('bag', type=Path, help='bag directory or .mcap file')
+    parser.add_argument('--rate', type=float, default=1.0, help='speed factor (default 1)')
+    parser.add_argument('--loop', action='store_true', help='start over at the end')
+    parser.add_argument('--topics', nargs='+', metavar='T', help='replay only these topics')
+    parser.add_argument('--start-offset', type=float, default=0.0, metavar='S',
+                        help='skip the first S seconds of the bag')
+    parser.add_argument('--clock', action='store_true',
+                        help='publish /clock from bag time (the recorded /clock is skipped)')
+    parser.add_argument('--delay', type=float, default=1.0, metavar='S',
+                        help='wait S seconds after creating publishers, for discovery')
+    return parser
+
+
+def main(argv=None) -> int:
+    """
+    Run ``nfmr-replay``; return the exit status.
+
+    That is 0, 2 on a bad option or bag, 130 on Ctrl-C or SIGTERM.
+    """
+    return run_command(_parser(), _run, argv)
+
+
+def _run(args) -> int:
+    # Plain floats, not positive_number: an infinite rate replays as fast as it can.
+    if not args.rate > 0.0:
+        raise UsageError(f'--rate must be > 0, got {args.rate}')
+    if args.start_offset < 0.0:
+        raise UsageError(f'--start-offset must be >= 0, got {args.start_offset}')
+    return replay(ReplayOptions(**vars(args)))
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""
+``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes, recorded to MCAP.
+
+The run itself is :mod:`nfmr_dlsmc.ros.launcher`'s.
+"""
+
+import argparse
+from pathlib import Path
+import sys
+
+from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
+from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.ros.launcher import run, RunOptions
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(
+        prog='nfmr-run', description='Run the DLSMC against the pybullet robot as two ROS 2 '
+                                     'processes and record the run to an MCAP bag.')
+    parser.add_argument('config', nargs='?', type=Path, default=None,
+                        help="parameter file with 'sim' and 'controller' sections "
+                             '(default: config/robot_case1.yaml, the robot profile; '
+                             "config/paper_case1.yaml holds the paper's law)")
+    parser.add_argument('--mode', choices=('lockstep', 'realtime'), default='lockstep')
+    parser.add_argument('--duration', type=float, default=100.0, help='simulated time [s]')
+    parser.add_argument('--out', type=Path, default=Path('runs'), help='parent of run folders')
+    parser.add_argument('--no-record', action='store_true', help='do not write a bag')
+    parser.add_argument('--gui', action='store_true', help='open the pybullet GUI')
+    parser.add_argument('--hold-from', type=float, default=HOLD_FROM, metavar='SECONDS',
+                        help='start of the window of the hold figures [s] '
+                             f'(default {HOLD_FROM:g})')
+    parser.add_argument('--stall-timeout', type=float, default=30.0, metavar='SECONDS',
+                        help='stop the run when simulated time has not advanced for this '
+                             'long (wall clock) [s] (default 30)')
+    parser.add_argument('--no-compare', action='store_true',
+                        help='skip the in-process pybullet and kinematic runs of the end table')
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run ``nfmr-run``; return the exit status."""
+    return run_command(_parser(), _run, argv)
+
+
+def _run(args) -> int:
+    # Plain floats, not positive_number: an infinite duration or stall timeout is allowed.
+    for option, value in (('--duration', args.duration),
+                          ('--stall-timeout', args.stall_timeout)):
+        if not value > 0.0:
+            raise UsageError(f'{option} must be > 0, got {value}')
+    if not args.hold_from >= 0.0:
+        raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
+    return run(RunOptions(**vars(args)))
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,146 @@
+"""
+The layer map of doc/design.md, checked on the sources.
+
+Each module of ``nfmr_dlsmc`` and ``nfmr_sim`` belongs to a layer (its sub-package); a
+layer imports only from the layers below it; ``nfmr_dlsmc`` never imports ``nfmr_sim``
+(the simulator registers itself as a plant instead); rclpy, pybullet, matplotlib and mcap
+are imported only where the map allows, and the core imports with them blocked.
+"""
+
+import ast
+from pathlib import Path
+import subprocess
+import sys
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: nfmr_dlsmc's layers, bottom first: a layer may import its own and those before it.
+DLSMC_LAYERS = ('core', 'baselines', 'plants', 'runtime', 'bag', 'analysis', 'ros', 'cli')
+#: Where nfmr_sim's two parts sit on that ladder: the ROS-free world just above
+#: nfmr_dlsmc's runtime, its node just above nfmr_dlsmc's ros layer.
+SIM_LAYERS = {'world': 3.5, 'ros': 6.5}
+#: The package's own __init__ (the public API) re-exports from core, plants and runtime.
+API_RANK = 3.25
+
+#: Third-party packages each layer may import (the standard library is always allowed).
+THIRD_PARTY = {
+    'core': {'numpy'},
+    'baselines': {'numpy', 'yaml'},
+    'plants': {'numpy', 'scipy'},
+    'runtime': {'numpy', 'yaml', 'ament_index_python'},
+    'bag': {'numpy', 'yaml', 'mcap', 'zstandard'},
+    'analysis': {'numpy', 'yaml', 'matplotlib'},
+    'ros': {'numpy', 'yaml', 'matplotlib', 'rclpy', 'builtin_interfaces', 'geometry_msgs',
+            'nav_msgs', 'sensor_msgs', 'std_msgs', 'rosgraph_msgs', 'diagnostic_msgs',
+            'rcl_interfaces', 'lifecycle_msgs', 'std_srvs', 'visualization_msgs'},
+    'cli': {'numpy', 'yaml', 'matplotlib'},
+    'api': set(),
+    'sim.world': {'numpy', 'pybullet', 'pybullet_utils', 'matplotlib'},
+}
+THIRD_PARTY['sim.ros'] = THIRD_PARTY['ros'] | {'numpy'}
+
+
+def _modules():
+    """(dotted name, path) of every module of both packages."""
+    for package in ('nfmr_dlsmc', 'nfmr_sim'):
+        for path in sorted((ROOT / package).rglob('*.py')):
+            parts = path.relative_to(ROOT).with_suffix('').parts
+            if parts[-1] == '__init__':
+                parts = parts[:-1]
+            yield '.'.join(parts), path
+
+
+def layer_of(module: str) -> str:
+    """Return the layer a module belongs to; AssertionError for one outside the map."""
+    parts = module.split('.')
+    if parts[0] == 'nfmr_dlsmc':
+        if len(parts) == 1:
+            return 'api'
+        assert parts[1] in DLSMC_LAYERS, f'{module} is in no layer'
+        return parts[1]
+    assert parts[0] == 'nfmr_sim', module
+    if len(parts) > 1 and parts[1] == 'ros':
+        return 'sim.ros'
+    return 'sim.world'
+
+
+def rank(layer: str) -> float:
+    if layer == 'api':
+        return API_RANK
+    if layer.startswith('sim.'):
+        return SIM_LAYERS[layer[4:]]
+    return float(DLSMC_LAYERS.index(layer))
+
+
+def imports_of(path: Path):
+    """Absolute module names imported anywhere in a file (function bodies included)."""
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom):
+            assert node.level == 0, f'{path}:{node.lineno}: relative import'
+            yield node.lineno, node.module
+
+
+MODULES = dict(_modules())
+STDLIB = sys.stdlib_module_names
+
+
+def test_every_module_belongs_to_a_layer():
+    outside = []
+    for module in MODULES:
+        try:
+            layer_of(module)
+        except AssertionError as exc:
+            outside.append(str(exc))
+    assert outside == []
+    assert {layer_of(m) for m in MODULES} == {*DLSMC_LAYERS, 'api', 'sim.world', 'sim.ros'}
+
+
+@pytest.mark.parametrize('module', sorted(MODULES))
+def test_imports_go_only_downward(module):
+    layer = layer_of(module)
+    wrong = []
+    for line, imported in imports_of(MODULES[module]):
+        top = imported.split('.')[0]
+        where = f'{MODULES[module].relative_to(ROOT)}:{line}'
+        if top in ('nfmr_dlsmc', 'nfmr_sim'):
+            if module.startswith('nfmr_dlsmc') and top == 'nfmr_sim':
+                wrong.append(f'{where}: imports {imported}; nfmr_dlsmc must not import nfmr_sim')
+            elif rank(layer_of(imported)) > rank(layer):
+                wrong.append(f'{where}: {layer} imports {imported} of layer '
+                             f'{layer_of(imported)}, which is above it')
+        elif top not in STDLIB and top not in THIRD_PARTY[layer]:
+            wrong.append(f'{where}: {layer} may not import {imported}')
+    assert wrong == []
+
+
+def test_the_core_imports_with_ros_pybullet_matplotlib_and_mcap_blocked():
+    core = [m for m in MODULES if layer_of(m) == 'core']
+    script = (
+        'import importlib, sys\n'
+        'class Block:\n'
+        '    def find_spec(self, name, path=None, target=None):\n'
+        '        if name.split(".")[0] in {"rclpy", "pybullet", "matplotlib", "mcap"}:\n'
+        '            raise ImportError(f"blocked: {name}")\n'
+        'sys.meta_path.insert(0, Block())\n'
+        f'for name in {core!r}:\n'
+        '    importlib.import_module(name)\n'
+        'print(len(sys.modules))\n')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert len(core) >= 10
+
+
+def test_the_layer_test_catches_an_upward_import(tmp_path):
+    """The check itself: an upward import and a forbidden package are reported."""
+    bad = tmp_path / 'bad.py'
+    bad.write_text('import rclpy\nfrom nfmr_dlsmc.cli.eval import main\n')
+    found = list(imports_of(bad))
+    assert found == [(1, 'rclpy'), (2, 'nfmr_dlsmc.cli.eval')]
+    assert rank(layer_of('nfmr_dlsmc.cli.eval')) > rank(layer_of('nfmr_dlsmc.core.dlsmc'))
+    assert 'rclpy' not in THIRD_PARTY['core']

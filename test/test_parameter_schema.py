@@ -1,0 +1,135 @@
+"""One schema per parameter: the README tables, the config comments and the checks follow it."""
+
+from dataclasses import fields, is_dataclass
+from pathlib import Path
+import re
+
+from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.schema import (
+    from_flat,
+    markdown_table,
+    NON_NEGATIVE,
+    params_of,
+    POSITIVE,
+)
+from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.params import controller_parameters, NodeOptions
+from nfmr_sim.sim_params import sim_parameters, SimSettings
+from nfmr_sim.urdf import ChassisConfig
+from nfmr_sim.world_config import (
+    DisturbanceConfig,
+    ForcePulse,
+    FrictionConfig,
+    FrictionPatch,
+    MotorConfig,
+    WorldConfig,
+)
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = (OuterLoopGains, InnerLoopGains, InputLimits, DlsmcConfig, RobotGeometry, SteerMode,
+           NodeOptions, SimSettings, WorldConfig, ChassisConfig, MotorConfig, FrictionConfig,
+           FrictionPatch, DisturbanceConfig, ForcePulse)
+NODES = {'controller': controller_parameters(), 'sim': sim_parameters()}
+#: A YAML line ``key: value  # comment`` (value and comment optional).
+LINE = re.compile(r'^(?P<indent> *)(?P<key>[^\s:#][^:#]*?):(?P<value>[^#]*?)\s*'
+                  r'(?:#\s*(?P<comment>.*))?$')
+
+
+def _leaves(path: Path):
+    """Yield (keys, comment, line number) of every leaf of a block-style YAML file."""
+    stack = []
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        match = LINE.match(line)
+        if not match or not line.strip() or line.lstrip().startswith('#'):
+            continue
+        indent = len(match['indent'])
+        while stack and stack[-1][0] >= indent:
+            stack.pop()
+        if match['value'].strip():
+            yield [k for _, k in stack] + [match['key']], match['comment'] or '', number
+        else:
+            stack.append((indent, match['key']))
+
+
+def _parameters_of_files():
+    """Yield (file:line, node names, dotted name, comment) of every parameter in config/."""
+    for path in sorted((ROOT / 'config').glob('*.yaml')):
+        for keys, comment, number in _leaves(path):
+            where = f'{path.name}:{number}'
+            if len(keys) > 2 and keys[1] == 'ros__parameters':
+                nodes = list(NODES) if keys[0] == '/**' else [keys[0].lstrip('/')]
+                yield where, nodes, '.'.join(keys[2:]), comment
+            elif keys[:2] == ['controllers', 'dlsmc_robot']:  # the DLSMC's block of the study
+                yield where, ['controller'], '.'.join(keys[2:]), comment
+
+
+@pytest.mark.parametrize('node', ['controller', 'sim'])
+def test_the_readme_holds_the_parameter_table_rendered_from_the_schema(node):
+    table = markdown_table(NODES[node])
+    assert table in (ROOT / 'README.md').read_text(), (
+        f'README.md: the {node} parameter table is out of date; it should read:\n{table}')
+
+
+def test_every_parameter_of_the_config_files_is_in_the_schema_with_its_unit():
+    found = list(_parameters_of_files())
+    assert len(found) > 60
+    for where, nodes, name, comment in found:
+        for node in nodes:
+            schema = {p.name: p for p in NODES[node]}
+            assert name in schema, f'{where}: {name} is no parameter of the {node} node'
+            units = ', '.join(re.findall(r'\[([^\]]+)\]', comment))
+            if units and not name.startswith('trajectory.'):  # trajectories keep no schema
+                assert units == schema[name].unit, (
+                    f'{where}: {name} is commented in [{units}], the schema says '
+                    f'[{schema[name].unit}]')
+
+
+def test_one_chassis_geometry_for_the_controller_and_the_sim():
+    assert issubclass(ChassisConfig, RobotGeometry)
+    geometry = {p.name.partition('.')[2]: p for p in params_of(RobotGeometry)}
+    chassis = {p.name.partition('.')[2]: p for p in params_of(ChassisConfig)}
+    for name, p in geometry.items():
+        assert (chassis[name].unit, chassis[name].description, chassis[name].rule_text,
+                chassis[name].default) == (p.unit, p.description, p.rule_text, p.default)
+    assert ChassisConfig().wheel_positions.tolist() == RobotGeometry().wheel_positions.tolist()
+    with pytest.raises(ParameterError, match=r'chassis\.steer_limit = 2\.0 rad: must be <= '):
+        ChassisConfig(steer_limit=2.0)
+
+
+@pytest.mark.parametrize('cls', CONFIGS, ids=[c.__name__ for c in CONFIGS])
+def test_every_field_of_a_config_is_a_parameter_or_a_nested_config(cls):
+    declared = {p.name.rpartition('.')[2] for p in params_of(cls)}
+    for f in fields(cls):
+        nested = is_dataclass(f.default_factory) if callable(f.default_factory) else False
+        assert f.name in declared or nested, f'{cls.__name__}.{f.name} has no schema'
+    assert 'Attributes' in cls.__doc__ and all(f'{name} : ' in cls.__doc__ for name in declared)
+
+
+@pytest.mark.parametrize('cls', CONFIGS, ids=[c.__name__ for c in CONFIGS])
+def test_a_value_breaking_a_sign_rule_is_refused_naming_parameter_value_and_unit(cls):
+    # The fields a record requires (FrictionPatch, ForcePulse), valid.
+    required = {name: value for name, value in (('x_min', 0.0), ('x_max', 1.0), ('y_min', 0.0),
+                                                ('y_max', 1.0), ('start', 0.0),
+                                                ('duration', 1.0))
+                if any(f.name == name for f in fields(cls))}
+    for p in params_of(cls):
+        if p.rule not in (POSITIVE, NON_NEGATIVE):
+            continue
+        with pytest.raises(ParameterError) as info:
+            from_flat(cls, {p.name: -1.0}, **required)
+        assert str(info.value).startswith(f'{p.name} = -1.0 {p.unit}'.rstrip() + ': must be')
+
+
+def test_defaults_and_live_flags_of_the_nodes():
+    controller = {p.name: p for p in NODES['controller']}
+    assert controller['control_rate'].default == 1.0 / DlsmcConfig.dt
+    assert not controller['inner.eps'].read_only and controller['geometry.wheelbase'].read_only
+    sim = {p.name: p for p in NODES['sim']}
+    live = {name for name, p in sim.items() if not p.read_only}
+    assert live == {'lockstep_timeout', 'command_timeout', 'aux_publish_every', 'max_time',
+                    'motors.max_wheel_speed', 'disturbance.constant_force_x',
+                    'disturbance.constant_force_y', 'disturbance.odom_position_noise',
+                    'disturbance.odom_yaw_noise', 'disturbance.pulses'}
+    assert (sim['initial_pose'].default, sim['disturbance.pulses'].default) == ([0.0] * 3, [])

@@ -1,0 +1,87 @@
+"""
+One user error in every command and both nodes: one line, the same form, exit status 2.
+
+Each executable of the install runs in its own process with one mistake a user makes (a
+missing or bad parameter file, a bad parameter value, a missing bag, a bad argument): it
+must end with exit status 2 and exactly one line on stderr, ``<prog>: error: ...`` naming
+the problem, and no traceback.
+"""
+
+from pathlib import Path
+import subprocess
+import sys
+
+import pytest
+
+BIN = Path(sys.executable).parent
+#: What pybullet itself prints when it is imported; not ours.
+PYBULLET_LINES = ('pybullet build time', 'argv[0]=')
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+#: (executable, its arguments given the test's folder, a text the one line must hold).
+CASES = [
+    ('nfmr-eval', lambda d: ['--params', str(d / 'missing.yaml')],
+     'cannot read parameter file {d}/missing.yaml'),
+    ('nfmr-run', lambda d: [str(d / 'missing.yaml'), '--out', str(d / 'runs')],
+     'cannot read parameter file {d}/missing.yaml'),
+    ('nfmr-analyze', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
+    ('nfmr-replay', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
+    ('nfmr-reindex', lambda d: [str(_write(d / 'x.mcap', 'not a bag'))], 'not an MCAP file'),
+    ('nfmr-montecarlo',
+     lambda d: ['--params', str(_write(d / 'p.yaml', 'controller:\n  ros__parameters:\n'
+                                                     '    inner: {p1: 32}\n'))],
+     'inner.p1 = 32: must be a positive odd integer'),
+    ('nfmr-bench', lambda d: ['--repeat', 'often'], 'argument --repeat: invalid int value'),
+    ('nfmr-tune',
+     lambda d: ['--params', str(_write(d / 'p.yaml', 'controller: [\n')),
+                '--out', str(d / 'tuned.yaml')],
+     'YAML syntax error'),
+    ('nfmr-tune-baselines', lambda d: ['--out', str(d)], 'is a directory, expected a file'),
+    ('nfmr-compare',
+     lambda d: ['--gains', str(_write(d / 'g.yaml', 'controllers:\n  pid: {kp: -2}\n')),
+                '--out', str(d / 'report')],
+     'pid.kp = -2'),
+    ('controller', lambda d: ['--ros-args', '--params-file', str(d / 'missing.yaml')],
+     'cannot read parameter file {d}/missing.yaml'),
+    ('controller', lambda d: ['--ros-args', '-p', 'inner.p1:=32'],
+     'inner.p1 = 32: must be a positive odd integer'),
+    ('controller', lambda d: ['--ros-args', '--no-such-ros-argument'], 'cannot start'),
+    ('sim',
+     lambda d: ['--ros-args', '--params-file',
+                str(_write(d / 'p.yaml', 'sim:\n  ros__parameters:\n'
+                                         '    motors: {drive_gear_ratio: 0.0}\n'))],
+     'motors.drive_gear_ratio = 0.0: must be > 0'),
+    ('sim', lambda d: ['--ros-args', '-p', 'mode:=fast'], "mode = 'fast'"),
+]
+
+
+def _ours(stderr: str) -> list[str]:
+    """Return the lines of ``stderr`` but those pybullet prints."""
+    return [line for line in stderr.splitlines() if not line.startswith(PYBULLET_LINES)]
+
+
+def test_every_console_script_is_covered():
+    from importlib.metadata import entry_points
+
+    scripts = {e.name for e in entry_points(group='console_scripts')
+               if e.value.startswith(('nfmr_dlsmc.', 'nfmr_sim.'))}
+    assert scripts == {name for name, _, _ in CASES}
+    assert len(scripts) == 12  # ten nfmr-* commands and the two nodes
+
+
+@pytest.mark.parametrize('name, arguments, needle', CASES,
+                         ids=[f'{c[0]}-{k}' for k, c in enumerate(CASES)])
+def test_a_user_error_is_one_line_and_exit_2(tmp_path, name, arguments, needle):
+    proc = subprocess.run([str(BIN / name), *arguments(tmp_path)], capture_output=True,
+                          text=True, timeout=60, cwd=tmp_path)
+    assert 'Traceback' not in proc.stderr + proc.stdout, proc.stderr
+    assert proc.returncode == 2, proc.stderr
+    lines = _ours(proc.stderr)
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f'{name}: error: '), lines[0]
+    assert needle.format(d=tmp_path) in lines[0]
