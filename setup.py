@@ -17,6 +17,7 @@ setup(
     install_requires=[
         'numpy>=1.26,<3',
         'matplotlib>=3.7,<4',
+        'pillow>=9,<14',
         'scipy>=1.11,<2',
         'pyyaml>=6,<7',
         'pybullet>=3.2.6,<4',

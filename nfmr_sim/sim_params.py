@@ -10,6 +10,7 @@ pulse.
 """
 
 from dataclasses import dataclass, field
+import math
 
 from nfmr_dlsmc.core.schema import (
     at_least,
@@ -55,6 +56,9 @@ class SimSettings:
     aux_publish_every: int = param(10, '', 'joint_states, ground_truth and '
                                    'disturbance_active go out every N physics steps (odom '
                                    'and /clock every step)', at_least(1))
+    marker_rate: float = param(20.0, 'Hz', 'robot_markers (the true pose of P and the '
+                               'measured steer angles) per second of simulated time, rounded '
+                               'to whole physics steps; 0: none', NON_NEGATIVE)
     initial_pose: tuple = param((0.0, 0.0, 0.0), 'm, m, rad', 'start pose of P',
                                 vector('x', 'y', 'yaw'), read_only=True)
     gui: bool = param(False, '', "open pybullet's GUI window instead of the headless client",
@@ -68,6 +72,13 @@ class SimSettings:
 
     def __post_init__(self):
         check_fields(self)
+
+    @property
+    def marker_every(self) -> int:
+        """Physics steps between two robot_markers messages (at least 1); 0: none."""
+        steps = (1.0 / (self.marker_rate * self.world.physics_dt) if self.marker_rate
+                 else math.inf)
+        return max(1, round(steps)) if math.isfinite(steps) else 0
 
 
 def sim_parameters() -> list[Param]:

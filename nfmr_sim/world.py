@@ -130,8 +130,13 @@ class ChassisWorld:
 
     # -- lifecycle -------------------------------------------------------------------------
 
-    def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
-        """Place P at ``pose`` (x [m], y [m], yaw [rad]) at rest; wheels straight, time 0."""
+    def reset(self, pose=(0.0, 0.0, 0.0), keep_time: bool = False) -> None:
+        """
+        Place P at ``pose`` (x [m], y [m], yaw [rad]) at rest, wheels straight.
+
+        The held commands, the odometry's latency buffer and its noise generator start over;
+        the time goes back to 0 unless ``keep_time``, which lets it run on.
+        """
         c, cfg = self._client, self.config
         x, y, yaw = (float(v) for v in pose)
         offset = cfg.tracked_point_offset
@@ -142,8 +147,9 @@ class ChassisWorld:
         c.resetBaseVelocity(self._robot, [0, 0, 0], [0, 0, 0])
         for j in self._joints:
             c.resetJointState(self._robot, j, 0.0, 0.0)
-        self._time = 0.0
-        self._steps = 0
+        if not keep_time:
+            self._time = 0.0
+            self._steps = 0
         self._steer_target = np.zeros(4)
         self._steer_applied = np.zeros(4)
         self._wheel_target = np.zeros(4)

@@ -20,6 +20,8 @@ def plain(value):
         return {k: plain(getattr(value, k)) for k in value.__slots__ if not k.isupper()}
     if isinstance(value, bytes) and len(value) == 1:  # rclpy's `byte` field
         return value[0]
+    if isinstance(value, bytes):  # mcap_ros2's uint8[] (Marker.texture.data)
+        return list(value)
     if isinstance(value, (list, tuple)) or hasattr(value, 'tolist'):
         return [plain(v) for v in (value.tolist() if hasattr(value, 'tolist') else value)]
     return value

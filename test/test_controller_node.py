@@ -76,11 +76,11 @@ def setup():
             Parameter(k, value=v) for k, v in overrides.items()])
         peer = Peer(context, TwistStamped if overrides.get('twist_stamped') else Twist)
         spinner = Spinner(context, node, peer)
+        made.update(node=node, peer=peer, spinner=spinner)
+        node.start()  # autostart: active, subscribed to odom from here
         wait_for(lambda: peer.count_subscribers('odom') > 0 and
                  node.count_subscribers('controller_state') > 0, what='discovery')
         time.sleep(0.3)
-        made.update(node=node, peer=peer, spinner=spinner)
-        node.start()
         return node, peer
 
     yield make

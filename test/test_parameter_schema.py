@@ -129,7 +129,7 @@ def test_defaults_and_live_flags_of_the_nodes():
     sim = {p.name: p for p in NODES['sim']}
     live = {name for name, p in sim.items() if not p.read_only}
     assert live == {'lockstep_timeout', 'command_timeout', 'aux_publish_every', 'max_time',
-                    'motors.max_wheel_speed', 'disturbance.constant_force_x',
+                    'marker_rate', 'motors.max_wheel_speed', 'disturbance.constant_force_x',
                     'disturbance.constant_force_y', 'disturbance.odom_position_noise',
                     'disturbance.odom_yaw_noise', 'disturbance.pulses'}
     assert (sim['initial_pose'].default, sim['disturbance.pulses'].default) == ([0.0] * 3, [])

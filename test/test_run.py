@@ -8,11 +8,22 @@ import sys
 import time
 
 from decoding import plain
+from geometry_msgs.msg import PoseStamped
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
-from nfmr_dlsmc.ros.recorder_node import message_class
+from nav_msgs.msg import Path as PathMessage
+from nfmr_dlsmc.bag.writer import BagWriter
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.ros.launcher import LATCHED_TOPICS, RUN_TOPICS
+from nfmr_dlsmc.ros.recorder_node import message_class, RecorderNode
+import numpy as np
+from PIL import Image
 import pytest
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
+from ros_helpers import new_context, Spinner, wait_for
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 import yaml
@@ -51,7 +62,7 @@ def wait_for_child(proc, marker, timeout=60.0):
 @pytest.fixture(scope='module')
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp('runs')
-    proc = start_run(out, '--duration', '3')
+    proc = start_run(out, '--duration', '3', '--animate')
     stdout, stderr = proc.communicate(timeout=300)
     return proc.returncode, stdout, stderr
 
@@ -67,6 +78,26 @@ def test_run_prints_metrics_and_ends_with_the_bag_path(short_run):
     for plot in ('trajectory.png', 'errors.png', 'inputs.png'):
         assert (bag.parent / plot).stat().st_size > 10_000
     assert 'real-time factor' in stderr
+
+
+def test_animate_adds_the_animation_of_the_run_to_its_folder(short_run):
+    code, stdout, stderr = short_run
+    assert code == 0, stderr
+    gif = Path(stdout.strip().splitlines()[-1]).parent / 'run.gif'
+    with Image.open(gif) as image:
+        # 3 s of run at 4x real time and 10 frames/s: 0.75 s of output, a frame per 0.4 s.
+        assert image.n_frames == 8
+        assert image.info['duration'] == 100
+    assert f'animation: {gif} (8 frames' in stderr
+
+
+def test_animate_needs_the_bag(tmp_path):
+    done = subprocess.run([RUN, '--no-record', '--animate', '--out', str(tmp_path)],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines()[-1] == (
+        'nfmr-run: error: --animate draws the run from its bag: drop --no-record')
+    assert not any(tmp_path.iterdir())
 
 
 def test_lockstep_records_every_step_and_every_reply(short_run):
@@ -191,3 +222,64 @@ def test_a_run_that_reaches_its_duration_ends_cleanly(short_run):
     assert len(diagnostics) >= 2
     levels = [s.level for d in diagnostics for s in d.status]
     assert levels and all(level == DiagnosticStatus.OK for level in levels), levels
+
+
+def test_the_bag_holds_the_reference_path_and_the_reference_markers(short_run):
+    # Read by rosbags (not our reader): the path the controller published once, transient
+    # local, when the launcher activated it, and its markers beside the sim's.
+    bag = Path(short_run[1].strip().splitlines()[-1])
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(bag) as reader:
+        connections = {c.topic: c for c in reader.connections}
+        offered = connections['/reference_path'].ext.offered_qos_profiles
+        paths = [store.deserialize_cdr(raw, conn.msgtype) for conn, _, raw in
+                 reader.messages(connections=[connections['/reference_path']])]
+        markers = [store.deserialize_cdr(raw, conn.msgtype) for conn, _, raw in
+                   reader.messages(connections=[connections['/robot_markers']])]
+    assert offered[0].durability.name == 'TRANSIENT_LOCAL'
+    (path,) = paths
+    assert path.header.frame_id == 'odom' and len(path.poses) == 61  # 3 s every 0.05 s
+    x_d, y_d, _, _ = make_trajectory('sine').sample(0.05 * np.arange(61))
+    np.testing.assert_allclose([p.pose.position.x for p in path.poses], x_d, atol=1e-12)
+    np.testing.assert_allclose([p.pose.position.y for p in path.poses], y_d, atol=1e-12)
+    reference = [m for m in markers if [k.ns for k in m.markers] == ['reference', 'theta_d']]
+    assert len(reference) > 20  # 20 Hz of the controller's (wall) clock while active
+
+
+def test_a_failed_controller_transition_is_reported_by_name(tmp_path):
+    # Only the controller checks its own options, when configured: the run stops there.
+    base = (Path(__file__).parents[1] / 'config' / 'robot_case1.yaml').read_text()
+    config = tmp_path / 'bad_option.yaml'
+    config.write_text(base.replace('controller:\n  ros__parameters:\n',
+                                   'controller:\n  ros__parameters:\n    max_odom_jump: -1.0\n'))
+    proc = start_run(tmp_path, str(config), '--duration', '3')
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1, stderr
+    assert "nfmr-run: error: controller transition 'configure' failed" in stderr
+    assert 'max_odom_jump = -1.0 m: must be > 0' in stderr
+
+
+def test_the_recorder_gets_a_latched_message_published_before_it_subscribed(tmp_path):
+    context = new_context()
+    publisher = Node('latched_publisher', context=context)
+    qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    sent = PathMessage()
+    sent.header.frame_id = 'odom'
+    sent.poses = [PoseStamped()]
+    sent.poses[0].pose.position.x = 1.5
+    publisher.create_publisher(PathMessage, '/reference_path', qos).publish(sent)
+    recorder = RecorderNode(BagWriter(tmp_path / 'bag'), RUN_TOPICS, latched=LATCHED_TOPICS,
+                            context=context)
+    spinner = Spinner(context, publisher, recorder)
+    try:
+        wait_for(lambda: recorder.received + recorder.pending() > 0, what='the latched path')
+    finally:
+        spinner.close()
+        recorder.close()
+        rclpy.try_shutdown(context=context)
+    with Reader(tmp_path / 'bag') as reader:
+        (connection,) = [c for c in reader.connections if c.topic == '/reference_path']
+        assert connection.ext.offered_qos_profiles[0].durability.name == 'TRANSIENT_LOCAL'
+        (raw,) = [raw for _, _, raw in reader.messages(connections=[connection])]
+    assert deserialize_message(bytes(raw), PathMessage) == sent

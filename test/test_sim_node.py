@@ -21,6 +21,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
+from visualization_msgs.msg import MarkerArray
 
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # /rosout keeps its latest messages for late joiners (transient local): so do we.
@@ -33,10 +34,13 @@ class Driver(Node):
     def __init__(self, context):
         super().__init__('driver', context=context)
         self.odom, self.clock, self.joints, self.logs = [], [], [], []
+        self.truth, self.markers = [], []
         self.new_odom = threading.Condition()
         self.create_subscription(Odometry, 'odom', self._on_odom, QOS)
         self.create_subscription(Clock, '/clock', self.clock.append, QOS)
         self.create_subscription(JointState, 'joint_states', self.joints.append, QOS)
+        self.create_subscription(Odometry, 'ground_truth', self.truth.append, QOS)
+        self.create_subscription(MarkerArray, 'robot_markers', self.markers.append, QOS)
         self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
         self.steer = self.create_publisher(Float64MultiArray,
                                            'steer_position_controller/commands', QOS)
@@ -352,5 +356,110 @@ def test_realtime_mode_never_runs_ahead_of_the_wall_clock(ros_context):
         sim_time = stamp.sec + stamp.nanosec * 1e-9
         assert sim_time <= elapsed + 0.002
         assert sim_time > 0.5 * elapsed  # and it does keep up
+    finally:
+        stop(sim, driver, executor)
+
+
+def _seconds(stamp):
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def _yaw(orientation):
+    return 2.0 * math.atan2(orientation.z, orientation.w)
+
+
+def test_robot_markers_show_the_true_pose_and_the_measured_steer_angles(ros_context):
+    # j1 = 0.5 puts P behind the centre: the chassis is drawn around the centre, not P. The
+    # odometry is noisy: the markers are not.
+    sim, driver, executor = start(ros_context, lockstep_timeout=1.0,
+                                  **{'steering.j1': 0.5, 'steering.j2': 0.5,
+                                     'disturbance.odom_position_noise': 0.01,
+                                     'disturbance.odom_yaw_noise': 0.01})
+    try:
+        client = AsyncParameterClient(driver, 'sim')
+        assert client.wait_for_services(timeout_sec=10.0)
+        offset = sim.world.config.tracked_point_offset
+        assert offset < -0.05
+        driver.wait_odom(1)
+        for k in range(600):
+            n = len(driver.odom)
+            angle = 0.4 * math.sin(k / 60.0)
+            driver.send([angle, 0.8 * angle, -0.5 * angle, -0.4 * angle], [4.0] * 4)
+            driver.wait_odom(n + 1)
+        wait_for(lambda: len(driver.markers) >= 13 and len(driver.truth) >= 61
+                 and len(driver.joints) >= 61)
+        stamps = [_seconds(a.markers[0].header.stamp) for a in driver.markers]
+        assert stamps[0] == 0.0
+        assert np.diff(stamps) == pytest.approx(0.05, abs=1e-9)  # 20 Hz of simulated time
+        joints = {_seconds(j.header.stamp): j for j in driver.joints}
+        truth = {_seconds(t.header.stamp): t for t in driver.truth}
+        steer_seen = 0.0
+        for array in driver.markers:
+            markers = {(m.ns, m.id): m for m in array.markers}
+            wheels = {('wheels', k) for k in range(4)}
+            assert set(markers) == {('chassis', 0), ('point_p', 0)} | wheels
+            assert {m.header.frame_id for m in array.markers} == {'odom'}
+            stamp = stamps[driver.markers.index(array)]
+            pose, steer = truth[stamp].pose.pose, joints[stamp].position[:4]
+            x, y, yaw = pose.position.x, pose.position.y, _yaw(pose.orientation)
+            point = markers[('point_p', 0)].pose.position
+            assert (point.x, point.y) == pytest.approx((x, y), abs=1e-9)
+            corners = [(p.x, p.y) for p in markers[('chassis', 0)].points[:4]]
+            centre = (x - offset * math.cos(yaw), y - offset * math.sin(yaw))
+            assert np.mean(corners, axis=0) == pytest.approx(centre, abs=1e-9)
+            for k in range(4):
+                wheel_yaw = _yaw(markers[('wheels', k)].pose.orientation)
+                assert math.remainder(wheel_yaw - yaw - steer[k], 2 * math.pi) == \
+                    pytest.approx(0.0, abs=1e-9)
+            steer_seen = max(steer_seen, max(abs(a) for a in steer))
+        assert steer_seen > 0.3  # the wheels did turn
+        assert _set(client, 'marker_rate', 100.0).successful
+        changed_at = _seconds(driver.odom[-1].header.stamp)
+        driver.drive(100, [0.0] * 4, [4.0] * 4)
+        wait_for(lambda: _seconds(driver.markers[-1].markers[0].header.stamp) >= changed_at
+                 + 0.1 - 1e-9)
+        later = [s for s in (_seconds(a.markers[0].header.stamp) for a in driver.markers)
+                 if s > changed_at]
+        assert np.diff(later) == pytest.approx(0.01, abs=1e-9)
+        assert _set(client, 'marker_rate', 0.0).successful
+        count, off_at = len(driver.markers), _seconds(driver.odom[-1].header.stamp)
+        driver.drive(100, [0.0] * 4, [4.0] * 4)
+        time.sleep(0.1)
+        assert all(_seconds(a.markers[0].header.stamp) <= off_at
+                   for a in driver.markers[count:])
+    finally:
+        stop(sim, driver, executor)
+
+
+def _diagonal(*variances):
+    return np.diag(variances).ravel()
+
+
+def test_odom_covariance_is_that_of_the_configured_noise_and_ground_truth_exact(ros_context):
+    sim, driver, executor = start(ros_context, mode='realtime',
+                                  **{'disturbance.odom_position_noise': 0.02,
+                                     'disturbance.odom_yaw_noise': 0.01})
+    try:
+        client = AsyncParameterClient(driver, 'sim')
+        assert client.wait_for_services(timeout_sec=10.0)
+        driver.wait_odom(600)
+        pose_covariance = _diagonal(0.02 ** 2, 0.02 ** 2, 1e6, 1e6, 1e6, 0.01 ** 2)
+        twist_covariance = _diagonal(0.0, 0.0, 1e6, 1e6, 1e6, 0.0)
+        for msg in driver.odom[:600]:
+            assert msg.pose.covariance.tolist() == pose_covariance.tolist()
+            assert msg.twist.covariance.tolist() == twist_covariance.tolist()
+        # The covariance says what the noise is: the robot stands still, its odometry varies.
+        xs = [m.pose.pose.position.x for m in driver.odom[:600]]
+        yaws = [_yaw(m.pose.pose.orientation) for m in driver.odom[:600]]
+        assert float(np.std(xs)) == pytest.approx(0.02, rel=0.15)
+        assert float(np.std(yaws)) == pytest.approx(0.01, rel=0.15)
+        assert driver.truth
+        for msg in driver.truth:
+            assert not any(msg.pose.covariance) and not any(msg.twist.covariance)
+        assert _set(client, 'disturbance.odom_position_noise', 0.05).successful
+        assert _set(client, 'disturbance.odom_yaw_noise', 0.0).successful
+        wait_for(lambda: driver.odom[-1].pose.covariance[35] == 0.0)
+        assert driver.odom[-1].pose.covariance.tolist() == _diagonal(
+            0.05 ** 2, 0.05 ** 2, 1e6, 1e6, 1e6, 0.0).tolist()
     finally:
         stop(sim, driver, executor)

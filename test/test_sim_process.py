@@ -12,11 +12,13 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_srvs.srv import SetBool
+from visualization_msgs.msg import MarkerArray
 
 SIM = str(Path(sys.executable).parent / 'sim')
 
 
-def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
+def test_sim_starts_from_the_paper_file_serves_and_stops_on_sigint(request):
     config = request.config.rootpath / 'config' / 'paper_case1.yaml'
     proc = subprocess.Popen([SIM, '--ros-args', '--params-file', str(config), '-p',
                              'mode:=realtime'],
@@ -24,18 +26,25 @@ def test_sim_starts_from_the_paper_file_and_stops_on_sigint(request):
     context = rclpy.Context()
     rclpy.init(context=context)
     node = Node('listener', context=context)
-    got = []
-    node.create_subscription(Odometry, 'odom', got.append,
-                             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+    got, markers = [], []
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    node.create_subscription(Odometry, 'odom', got.append, qos)
+    node.create_subscription(MarkerArray, 'robot_markers', markers.append, qos)
+    pause = node.create_client(SetBool, '/sim/pause')
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     try:
         deadline = time.monotonic() + 30.0
-        while not got and time.monotonic() < deadline and proc.poll() is None:
+        while not (got and markers) and time.monotonic() < deadline and proc.poll() is None:
             executor.spin_once(timeout_sec=0.1)
         assert got, 'no odometry from the sim process'
+        assert markers, 'no robot_markers from the sim process'
         pose = got[-1].pose.pose.position
         assert (pose.x, pose.y) == pytest.approx((1.0, 4.0), abs=0.01)
+        assert pause.wait_for_service(timeout_sec=10.0)
+        future = pause.call_async(SetBool.Request(data=True))
+        executor.spin_until_future_complete(future, timeout_sec=10.0)
+        assert future.done() and future.result().message.startswith('paused at ')
     finally:
         node.destroy_node()
         rclpy.try_shutdown(context=context)

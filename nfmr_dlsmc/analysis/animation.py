@@ -25,9 +25,10 @@ from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMod
 from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
 from nfmr_dlsmc.plants.kinematic import SimResult
 import numpy as np
+from PIL import Image
 
-__all__ = ['AnimationConfig', 'AnimationError', 'RunSeries', 'animate_run', 'frame_times',
-           'save_frame', 'series_from_sim']
+__all__ = ['AnimationConfig', 'AnimationError', 'RunSeries', 'animate_run',
+           'check_animation_path', 'frame_times', 'save_frame', 'series_from_sim']
 
 
 class AnimationError(NfmrError, RuntimeError):
@@ -151,12 +152,28 @@ def _check_directory(name: str, out_path: Path) -> None:
         raise ParameterError(name, str(out_path), 'its directory does not exist')
 
 
+class _PalettedGifWriter(PillowWriter):
+    """
+    matplotlib's Pillow writer, each frame kept as the 256-colour image a GIF stores.
+
+    The Pillow writer holds every frame until the end; as RGB that is 0.9 MB a frame at
+    640 x 480 (0.7 GB for a 100 s run at the defaults), as the adaptive palette the GIF
+    encoder would convert it to anyway, a third of it.
+    """
+
+    def grab_frame(self, **savefig_kwargs):
+        super().grab_frame(**savefig_kwargs)
+        frame = self._frames[-1]
+        if frame.mode == 'RGB':
+            self._frames[-1] = frame.convert('P', palette=Image.Palette.ADAPTIVE)
+
+
 def _writer(out_path: Path, fps: float):
     """Return the matplotlib writer for the output's suffix, checked before any drawing."""
     _check_directory('out_path', out_path)
     suffix = out_path.suffix.lower()
     if suffix == '.gif':
-        return PillowWriter(fps=fps)
+        return _PalettedGifWriter(fps=fps)
     if suffix == '.mp4':
         if not writers.is_available('ffmpeg'):
             raise AnimationError(f"cannot write {out_path}: an .mp4 needs matplotlib's "
@@ -164,6 +181,21 @@ def _writer(out_path: Path, fps: float):
                                  'ffmpeg); write a .gif instead')
         return FFMpegWriter(fps=fps)
     raise ParameterError('out_path', str(out_path), 'must end in .gif or .mp4')
+
+
+def check_animation_path(out_path) -> None:
+    """
+    Refuse, before any work, an animation output this machine cannot write.
+
+    Raises
+    ------
+    ParameterError
+        For a suffix other than .gif and .mp4, or a directory that does not exist.
+    AnimationError
+        For an .mp4 without matplotlib's ffmpeg writer.
+
+    """
+    _writer(Path(out_path), AnimationConfig().fps)
 
 
 class _Scene:
@@ -265,7 +297,7 @@ def _indices(series: RunSeries, times: np.ndarray) -> np.ndarray:
 
 def animate_run(series: RunSeries, out_path, config: AnimationConfig = AnimationConfig(),
                 footprint: Footprint = Footprint(), geometry: RobotGeometry = RobotGeometry(),
-                p_offset_m: float = 0.0) -> int:
+                p_offset_m: float = 0.0, progress=None) -> int:
     """
     Write an animation of a run to ``out_path`` (.gif, or .mp4 where ffmpeg is available).
 
@@ -283,6 +315,8 @@ def animate_run(series: RunSeries, out_path, config: AnimationConfig = Animation
         Places the wheels.
     p_offset_m : float
         Body-frame x of P from the geometric centre [m] (``SteerMode.zero_slip_offset``).
+    progress : callable, optional
+        ``progress(done, total)``, called as each frame is drawn (``done`` counts it).
 
     Returns
     -------
@@ -304,7 +338,8 @@ def animate_run(series: RunSeries, out_path, config: AnimationConfig = Animation
     animation = FuncAnimation(scene.figure, lambda k: scene.show(indices[k]),
                               frames=len(indices), init_func=lambda: [], repeat=False,
                               cache_frame_data=False)
-    animation.save(str(out_path), writer=writer, dpi=scene.dpi)
+    report = None if progress is None else lambda k, total: progress(k + 1, total)
+    animation.save(str(out_path), writer=writer, dpi=scene.dpi, progress_callback=report)
     return len(indices)
 
 

@@ -1,14 +1,30 @@
-"""``nfmr-analyze``: the paper's metrics of recorded runs, compared side by side."""
+"""
+``nfmr-analyze``: the paper's metrics of recorded runs, compared side by side.
+
+With ``--animate`` it also draws one run as a GIF or MP4
+(:func:`~nfmr_dlsmc.ros.run_analysis.animate_contents`).
+"""
 
 import argparse
 import json
 from pathlib import Path
 import sys
+import time
 
+from nfmr_dlsmc.analysis.animation import AnimationConfig, check_animation_path
 from nfmr_dlsmc.bag.reader import read_bag
-from nfmr_dlsmc.cli.common import json_ready, OneLineParser, run_command, UsageError
+from nfmr_dlsmc.cli.common import (
+    check_writable,
+    json_ready,
+    OneLineParser,
+    positive_number,
+    run_command,
+    UsageError,
+)
 from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.ros.run_analysis import (
+    animate_contents,
+    ANIMATION_TOPICS,
     JOINT_TOPIC,
     metrics_table,
     plot_runs,
@@ -33,7 +49,24 @@ def _parser() -> argparse.ArgumentParser:
                              f'(default {HOLD_FROM:g})')
     parser.add_argument('--json', action='store_true',
                         help='print one JSON object (last line) instead of the table')
+    defaults = AnimationConfig()
+    parser.add_argument('--animate', type=_animation_path, metavar='OUT',
+                        help='also write an animation of the run of the (one) bag, seen '
+                             'from above: OUT.gif, or OUT.mp4 where ffmpeg is installed')
+    parser.add_argument('--animate-speed', type=positive_number, metavar='FACTOR',
+                        help='playback speed of --animate, a multiple of real time (default '
+                             f'{defaults.speed:g})')
+    parser.add_argument('--animate-fps', type=positive_number, metavar='FPS',
+                        help=f'frames per second of --animate (default {defaults.fps:g})')
     return parser
+
+
+def _animation_path(text: str) -> Path:
+    """Argparse type: an animation's path, ending in .gif or .mp4."""
+    path = Path(text)
+    if path.suffix.lower() not in ('.gif', '.mp4'):
+        raise argparse.ArgumentTypeError(f'expected a file ending in .gif or .mp4, got {text!r}')
+    return path
 
 
 def main(argv=None) -> int:
@@ -44,10 +77,20 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     if not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
-    results = [_measure(path, args.hold_from) for path in args.bags]
+    if args.animate is None and (args.animate_speed, args.animate_fps) != (None, None):
+        raise UsageError('--animate-speed and --animate-fps need --animate')
+    if args.animate is not None:
+        if len(args.bags) != 1:
+            raise UsageError(f'--animate draws one bag; got {len(args.bags)}')
+        check_writable(args.animate, '--animate')
+        check_animation_path(args.animate)
+    started = time.monotonic()
+    results = [_measure(path, args.hold_from, args.animate is not None) for path in args.bags]
     if args.plots:
         paths = plot_runs([(r['label'], r['series']) for r in results], args.plots)
         print(f"plots: {', '.join(str(p) for p in paths)}", file=sys.stderr)
+    if args.animate is not None:
+        _animate(results[0], args, started)
     if args.json:
         print(json.dumps(json_ready({'bags': [{'path': r['path'], 'truncated': r['truncated'],
                                                'metrics': r['metrics'].as_dict()}
@@ -57,9 +100,31 @@ def _run(args) -> int:
     return 0
 
 
-def _measure(path: Path, hold_from: float) -> dict:
+def _animate(result: dict, args, started: float) -> None:
+    """Write the animation of a measured bag, with progress and a summary on stderr."""
+    defaults = AnimationConfig()
+    config = AnimationConfig(speed=args.animate_speed or defaults.speed,
+                             fps=args.animate_fps or defaults.fps)
+
+    def progress(done: int, total: int) -> None:
+        if done % 10 == 0 or done == total:
+            print(f'\ranimation: frame {done} / {total}', end='', file=sys.stderr, flush=True)
+
+    shown = animate_contents(result['contents'], args.animate, config, result['series'],
+                             progress)
+    print(file=sys.stderr)
+    out, frames, seconds = shown['out'], shown['frames'], shown['seconds']
+    print(f'animation: {out}: {frames} frames, {seconds:.1f} s at {config.speed:g}x real time '
+          f'and {config.fps:g} fps, in {time.monotonic() - started:.1f} s; pose of P from '
+          f"{shown['pose']}; geometry {shown['geometry']}", file=sys.stderr)
+
+
+def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
     """
     Read and measure one bag; a truncated bag's warning goes to stderr.
+
+    With ``animate`` the topics an animation needs are read too and the result keeps what
+    was read under ``contents`` (else None).
 
     Raises
     ------
@@ -67,14 +132,15 @@ def _measure(path: Path, hold_from: float) -> dict:
         The bag cannot be read or has no controller state.
 
     """
-    contents = read_bag(path, topics=[STATE_TOPIC, JOINT_TOPIC])
+    topics = ANIMATION_TOPICS if animate else (STATE_TOPIC, JOINT_TOPIC)
+    contents = read_bag(path, topics=list(topics))
     warning = contents.warning()
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
     series = state_series(contents)
     return {'path': str(path), 'label': _label(path), 'series': series,
             'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
-            'truncated': contents.truncated}
+            'truncated': contents.truncated, 'contents': contents if animate else None}
 
 
 def _label(path: Path) -> str:

@@ -34,6 +34,9 @@ def _parser() -> argparse.ArgumentParser:
                              'long (wall clock) [s] (default 30)')
     parser.add_argument('--no-compare', action='store_true',
                         help='skip the in-process pybullet and kinematic runs of the end table')
+    parser.add_argument('--animate', action='store_true',
+                        help='also write run.gif, the robot from above along the run, into '
+                             'the run folder (needs the bag: not with --no-record)')
     return parser
 
 
@@ -50,6 +53,8 @@ def _run(args) -> int:
             raise UsageError(f'{option} must be > 0, got {value}')
     if not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
+    if args.animate and args.no_record:
+        raise UsageError('--animate draws the run from its bag: drop --no-record')
     return run(RunOptions(**vars(args)))
 
 

@@ -1,38 +1,75 @@
 """
-ROS 2 node ``controller``: the DLSMC at 1 kHz between odometry and wheel commands.
+ROS 2 managed node ``controller``: the DLSMC at 1 kHz between odometry and wheel commands.
 
 Inputs: ``odom`` (nav_msgs/Odometry of P). Outputs: ``cmd_vel`` (geometry_msgs/Twist, or
 TwistStamped with ``twist_stamped: true``), ``steer_position_controller/commands`` [rad]
 and ``wheel_velocity_controller/commands`` [rad/s] (std_msgs/Float64MultiArray,
 FL FR RL RR), ``controller_state`` (std_msgs/Float64MultiArray whose single layout
 dimension is labelled with the comma-separated field names of
-:data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`) and ``/diagnostics`` at 1 Hz.
+:data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`), ``reference_path``
+(nav_msgs/Path of the trajectory from t = 0 to ``path_horizon``, transient local: a
+subscriber that comes later still gets it), ``robot_markers``
+(visualization_msgs/MarkerArray at 20 Hz of the node clock: the reference point and the
+desired heading theta_d, :func:`~nfmr_dlsmc.ros.scene.reference_markers`) and
+``/diagnostics`` at 1 Hz, which names the lifecycle state.
+
+Lifecycle (``rclpy.lifecycle``; ``ros2 lifecycle set /controller <transition>``):
+
+- configure validates the parameters and builds the tracking session and the publishers;
+  a bad parameter fails the transition, logged in one line, and the node stays
+  unconfigured;
+- activate starts a new session, publishes ``reference_path`` and subscribes to ``odom``:
+  the first valid odometry after it is trajectory time 0 (doc/design.md, D10);
+- deactivate commands zero speed once (``cmd_vel`` zero, wheel speeds zero, the steering
+  held) and publishes no further command; odometry is no longer taken;
+- cleanup drops the session and the publishers; shutdown deactivates first when active.
+
+With ``autostart: true`` (the default) the node configures itself when it is created (a
+bad parameter then ends it as a user error) and activates when started, so
+``controller --ros-args --params-file FILE`` runs at once; ``nfmr-run`` starts it with
+``autostart: false`` and drives the transitions.
 
 Ticks: ``tick_source: odom`` runs one control step per odometry message (lockstep with
 the sim: exactly one command per physics step); ``tick_source: clock`` runs a dedicated
-thread that sleeps to absolute deadlines at ``control_rate`` on the node clock (the wall
-clock, or the sim's ``/clock`` under ``use_sim_time``).
+thread, while active, that sleeps to absolute deadlines at ``control_rate`` on the node
+clock (the wall clock, or the sim's ``/clock`` under ``use_sim_time``).
 """
 
+from contextlib import contextmanager
+import math
 import sys
 import threading
 import time
+import traceback
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.schema import from_flat
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
-from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
+from nfmr_dlsmc.ros.parameters import plain_value, SchemaLifecycleNode
+from nfmr_dlsmc.ros.scene import reference_markers, reference_path
 from nfmr_dlsmc.runtime.loop_stats import LoopStats
 from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, NodeOptions
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from visualization_msgs.msg import MarkerArray
+
+COMMAND_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: The reference path is kept for subscribers that join later.
+PATH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+MARKER_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+PATH_STEP = 0.05  # [s] time between poses of reference_path
+MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
+MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
+_REFERENCE_FIELDS = tuple(STATE_FIELDS.index(name) for name in ('x_d', 'y_d', 'theta_d'))
 
 
 def _session_options(values: dict) -> dict:
@@ -55,34 +92,165 @@ def _session_options(values: dict) -> dict:
             'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold}
 
 
-class ControllerNode(SchemaNode):
-    """Thin wrapper: odometry -> :class:`TrackingSession` -> command messages."""
+def _new_session(values: dict) -> TrackingSession:
+    """
+    Return a tracking session of the parameter values ``values``.
+
+    Raises
+    ------
+    ParameterError
+        For an invalid parameter.
+
+    """
+    return TrackingSession(controller_params(values), **_session_options(values))
+
+
+class ControllerNode(SchemaLifecycleNode):
+    """Thin wrapper: odometry -> :class:`TrackingSession` -> command messages, managed."""
 
     def __init__(self, **kwargs):
         super().__init__('controller', controller_parameters(), **kwargs)
-        values = self._values = self.parameter_values
-        params = controller_params(values)
-        self.session = TrackingSession(params, **_session_options(values))
+        self._values = self.parameter_values
+        self.session = None  # while configured
         self._lock = threading.Lock()
-        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-        twist_type = TwistStamped if values['twist_stamped'] else Twist
-        self._twist_pub = self.create_publisher(twist_type, 'cmd_vel', qos)
-        self._steer_pub = self.create_publisher(
-            Float64MultiArray, 'steer_position_controller/commands', qos)
-        self._wheel_pub = self.create_publisher(
-            Float64MultiArray, 'wheel_velocity_controller/commands', qos)
-        self._state_pub = self.create_publisher(Float64MultiArray, 'controller_state', qos)
-        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(Odometry, 'odom', self._on_odom, qos)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-        self._stats = LoopStats(overrun_threshold=2.0 * params.dlsmc.dt)
+        self._active = False  # whether odometry is taken and commands are published
+        self._publishers_of_session = []
+        self._odom_sub = None  # while active
+        self._active_timers = []  # the watchdog and the markers, while active
+        self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
+        self._reference = None  # (x_d [m], y_d [m], theta_d [rad]) of the latest tick
+        self._stats = None
         self._state_layout = [MultiArrayDimension(
             label=','.join(STATE_FIELDS), size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
         self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
         self._loop = LoopThread(self._clock_loop, 'dlsmc-1khz', node=self)
-        self.create_timer(values['watchdog_period'], self._watchdog)
-        self.create_timer(1.0, self._publish_diagnostics)
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._diag_timer = self.create_timer(1.0, self._publish_diagnostics)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
         self.ticks = 0
+        if self._values['autostart']:
+            _new_session(self._values)  # a bad parameter ends the node here: a user error
+            self.trigger_configure()
+
+    @property
+    def lifecycle_state(self) -> str:
+        """Return the label of the current lifecycle state (``unconfigured``, ``active``...)."""
+        return self._state_machine.current_state[1]
+
+    def start(self) -> None:
+        """With ``autostart``, activate (the node configured itself when it was created)."""
+        if self._values['autostart']:
+            self.trigger_activate()
+
+    def stop(self) -> None:
+        """Stop the clock loop thread (idempotent)."""
+        self._loop.stop()
+
+    # -- lifecycle --------------------------------------------------------------------------
+
+    @contextmanager
+    def _transition(self, name: str):
+        """Log an unexpected failure of a transition with its traceback (rclpy drops it)."""
+        try:
+            yield
+        except Exception:
+            self.get_logger().error(f'{name} failed:\n{traceback.format_exc()}')
+            raise
+
+    def on_configure(self, state) -> TransitionCallbackReturn:
+        """Validate the parameters, build the session and the publishers."""
+        with self._transition('configure'):
+            try:
+                session = _new_session(self._values)
+            except ParameterError as exc:
+                self.get_logger().error(f'configure failed: {exc}')
+                return TransitionCallbackReturn.FAILURE
+            self.session = session
+            twist_type = TwistStamped if self._values['twist_stamped'] else Twist
+            publish = self.create_lifecycle_publisher
+            self._twist_pub = publish(twist_type, 'cmd_vel', COMMAND_QOS)
+            self._steer_pub = publish(Float64MultiArray, 'steer_position_controller/commands',
+                                      COMMAND_QOS)
+            self._wheel_pub = publish(Float64MultiArray, 'wheel_velocity_controller/commands',
+                                      COMMAND_QOS)
+            self._state_pub = publish(Float64MultiArray, 'controller_state', COMMAND_QOS)
+            self._path_pub = publish(Path, 'reference_path', PATH_QOS)
+            self._marker_pub = publish(MarkerArray, 'robot_markers', MARKER_QOS)
+            self._publishers_of_session = [self._twist_pub, self._steer_pub, self._wheel_pub,
+                                           self._state_pub, self._path_pub, self._marker_pub]
+            return super().on_configure(state)
+
+    def on_activate(self, state) -> TransitionCallbackReturn:
+        """Start a new session on the next odometry; publish the reference path."""
+        with self._transition('activate'):
+            values = self._values
+            with self._lock:
+                self.session = _new_session(values)
+                self._reference = None
+                self._stats = LoopStats(overrun_threshold=2.0 * self.session.params.dlsmc.dt)
+                self._active = True
+            result = super().on_activate(state)  # the lifecycle publishers publish from here
+            self._publish_path()
+            self._odom_sub = self.create_subscription(Odometry, 'odom', self._on_odom,
+                                                      COMMAND_QOS)
+            self._active_timers = [self.create_timer(values['watchdog_period'], self._watchdog),
+                                   self.create_timer(MARKER_PERIOD, self._publish_markers)]
+            self._diag_timer.reset()  # a full second of activity before the first figures
+            if values['tick_source'] == 'clock':
+                self._loop.start()
+            self.get_logger().info('active: tracking starts at the next odometry')
+            return result
+
+    def on_deactivate(self, state) -> TransitionCallbackReturn:
+        """Command zero speed once, then publish nothing."""
+        with self._transition('deactivate'):
+            self._stop_tracking()
+            return super().on_deactivate(state)
+
+    def on_cleanup(self, state) -> TransitionCallbackReturn:
+        """Drop the session and the publishers."""
+        with self._transition('cleanup'):
+            self._release()
+            return super().on_cleanup(state)
+
+    def on_shutdown(self, state) -> TransitionCallbackReturn:
+        """Command zero speed once if active, then drop everything."""
+        with self._transition('shutdown'):
+            if self._active:
+                self._stop_tracking()
+            self._release()
+            return super().on_shutdown(state)
+
+    def on_error(self, state) -> TransitionCallbackReturn:
+        """After a failed transition: stop and drop everything, back to unconfigured."""
+        self._loop.stop()
+        self._active = False
+        self._drop_active_entities()
+        self._release()
+        return TransitionCallbackReturn.SUCCESS
+
+    def _stop_tracking(self) -> None:
+        """Leave the active state: stop the loop and the odometry, command zero speed once."""
+        self._loop.stop()
+        with self._lock:
+            self._active = False
+            self._publish_zero()
+        self._drop_active_entities()
+        self.get_logger().info('inactive: zero speed commanded once, no further commands')
+
+    def _drop_active_entities(self) -> None:
+        if self._odom_sub is not None:
+            self.destroy_subscription(self._odom_sub)
+            self._odom_sub = None
+        for timer in self._active_timers:
+            self.destroy_timer(timer)
+        self._active_timers = []
+
+    def _release(self) -> None:
+        for publisher in self._publishers_of_session:
+            self.destroy_lifecycle_publisher(publisher)
+        self._publishers_of_session = []
+        self.session = self._held_steer = self._reference = None
 
     # -- parameters -------------------------------------------------------------------------
 
@@ -97,10 +265,14 @@ class ControllerNode(SchemaNode):
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         with self._lock:
+            new_frame = candidate['odom_frame'] != self._values['odom_frame']
             self._values = candidate
-            self.session.set_params(params)
-            for name, value in options.items():
-                setattr(self.session, name, value)
+            if self.session is not None:
+                self.session.set_params(params)
+                for name, value in options.items():
+                    setattr(self.session, name, value)
+        if new_frame and self._active:
+            self._publish_path()  # in the frame odometry is now expected in
         return SetParametersResult(successful=True)
 
     # -- ticks ------------------------------------------------------------------------------
@@ -111,6 +283,8 @@ class ControllerNode(SchemaNode):
         wall = time.monotonic()
         by_odom = self._values['tick_source'] == 'odom'
         with self._lock:
+            if not self._active:
+                return
             accepted = self.session.on_odometry(
                 p.position.x, p.position.y,
                 yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
@@ -124,22 +298,25 @@ class ControllerNode(SchemaNode):
 
     def _tick(self, control_time: float) -> None:
         start = time.monotonic()
-        with self._lock:
+        with self._lock:  # no command after the zero of a deactivation
+            if not self._active:
+                return
             out = self.session.tick(control_time, start)
-        if out is None:
-            return
+            if out is None:
+                return
+            self._publish(out)
         if out.report and out.stopped:
             self.get_logger().warning(out.report)
         elif out.report:
             self.get_logger().info(out.report)
-        self._publish(out)
         self.ticks += 1
         # Periods on the clock that drives the ticks: in lockstep (tick_source odom) the
         # odometry stamps, so a sim slower than real time is no overrun; compute on the wall.
         by_odom = self._values['tick_source'] == 'odom'
         self._stats.record(control_time if by_odom else start, time.monotonic() - start)
 
-    def _publish(self, out) -> None:
+    def _twist(self, v: float, omega: float):
+        """Return the ``cmd_vel`` message of (v [m/s], omega [rad/s])."""
         if self._values['twist_stamped']:
             msg = TwistStamped()
             msg.header.stamp = self.get_clock().now().to_msg()
@@ -147,14 +324,40 @@ class ControllerNode(SchemaNode):
             twist = msg.twist
         else:
             msg = twist = Twist()
-        twist.linear.x = out.v
-        twist.angular.z = out.omega
+        twist.linear.x = v
+        twist.angular.z = omega
+        return msg
+
+    def _publish(self, out) -> None:
         self._steer_pub.publish(Float64MultiArray(data=out.steer.tolist()))
         self._wheel_pub.publish(Float64MultiArray(data=out.wheel_speed.tolist()))
-        self._twist_pub.publish(msg)
+        self._twist_pub.publish(self._twist(out.v, out.omega))
         state = Float64MultiArray(data=list(out.state))
         state.layout.dim = self._state_layout
         self._state_pub.publish(state)
+        self._held_steer = out.steer.tolist()
+        self._reference = tuple(out.state[k] for k in _REFERENCE_FIELDS)
+
+    def _publish_zero(self) -> None:
+        """Command zero speed: wheel speeds 0, the steering held where it was commanded."""
+        if self._held_steer is not None:
+            self._steer_pub.publish(Float64MultiArray(data=self._held_steer))
+        self._wheel_pub.publish(Float64MultiArray(data=[0.0] * 4))
+        self._twist_pub.publish(self._twist(0.0, 0.0))
+
+    def _publish_path(self) -> None:
+        horizon = self._values['path_horizon']
+        step = max(PATH_STEP, horizon / (MAX_PATH_POSES - 1))
+        self._path_pub.publish(reference_path(
+            self.session.params.trajectory, horizon, step, self.get_clock().now().to_msg(),
+            self._values['odom_frame']))
+
+    def _publish_markers(self) -> None:
+        reference = self._reference
+        if reference is None or not all(math.isfinite(v) for v in reference):
+            return
+        self._marker_pub.publish(reference_markers(self.get_clock().now().to_msg(), *reference,
+                                                   frame_id=self._values['odom_frame']))
 
     def _watchdog(self) -> None:
         """Stale odometry stops the robot even when no odometry arrives to tick on."""
@@ -164,15 +367,6 @@ class ControllerNode(SchemaNode):
             stale = self.session.odometry_age(time.monotonic()) > self.session.odom_timeout
         if stale:
             self._tick(self._now())
-
-    def start(self) -> None:
-        """Start the clock-driven loop thread (``tick_source: clock`` only)."""
-        if self._values['tick_source'] == 'clock':
-            self._loop.start()
-
-    def stop(self) -> None:
-        """Stop the loop thread (idempotent)."""
-        self._loop.stop()
 
     def _clock_loop(self) -> None:
         period = self.session.params.dlsmc.dt
@@ -203,17 +397,22 @@ class ControllerNode(SchemaNode):
     # -- diagnostics ------------------------------------------------------------------------
 
     def _publish_diagnostics(self) -> None:
-        figures = self._stats.take()
+        lifecycle = self.lifecycle_state
         status = DiagnosticStatus(name='nfmr controller: control loop', hardware_id='dlsmc')
-        if figures is None:
+        status.values = [KeyValue(key='lifecycle_state', value=lifecycle)]
+        figures = self._stats.take() if lifecycle == 'active' else None
+        if lifecycle != 'active':
+            status.level = DiagnosticStatus.OK
+            status.message = f'{lifecycle}: not controlling'
+        elif figures is None:
             status.level = DiagnosticStatus.WARN
-            status.message = 'no control ticks in the last second'
+            status.message = 'active: no control ticks in the last second'
         else:
             late = figures.overruns > 0
             status.level = DiagnosticStatus.WARN if late else DiagnosticStatus.OK
-            status.message = (f'{figures.rate_hz:.1f} Hz, {figures.overruns} overruns'
-                              if late else f'{figures.rate_hz:.1f} Hz')
-            status.values = [KeyValue(key=k, value=f'{v:.6g}') for k, v in (
+            status.message = (f'active: {figures.rate_hz:.1f} Hz, {figures.overruns} overruns'
+                              if late else f'active: {figures.rate_hz:.1f} Hz')
+            status.values += [KeyValue(key=k, value=f'{v:.6g}') for k, v in (
                 ('rate_hz', figures.rate_hz), ('period_p50_ms', figures.period_p50_ms),
                 ('period_p99_ms', figures.period_p99_ms), ('period_max_ms', figures.period_max_ms),
                 ('overruns', figures.overruns), ('compute_p99_us', figures.compute_p99_us),
@@ -223,6 +422,9 @@ class ControllerNode(SchemaNode):
         self._diag_pub.publish(msg)
 
     def destroy_node(self):
+        """Shut down as the lifecycle defines (zero speed once if active), then destroy."""
+        if self.context.ok() and self.lifecycle_state in ('unconfigured', 'inactive', 'active'):
+            self.trigger_shutdown()
         self.stop()
         return super().destroy_node()
 

@@ -1,8 +1,10 @@
 """
 The run of ``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes.
 
-:func:`run` starts ``sim`` and ``controller`` from one parameter file, records every topic
-of the run into a rosbag2 MCAP bag (in this process), shows progress, and at the end
+:func:`run` starts ``sim`` and ``controller`` from one parameter file, the controller
+without autostart: once both are up it configures and activates the controller through its
+lifecycle services, and deactivates it (zero speed) when the run is over. It records every
+topic of the run into a rosbag2 MCAP bag (in this process), shows progress, and at the end
 prints the paper's metrics and those of holding the path next to the same scenario run in
 this process on the pybullet chassis (no ROS) and on the kinematic model, and writes
 plots. The last line printed is the bag directory. The command line is
@@ -19,6 +21,7 @@ import sys
 import threading
 import time
 
+from lifecycle_msgs.srv import ChangeState, GetState
 from nfmr_dlsmc.analysis.evaluation import plant_run
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter
@@ -28,6 +31,7 @@ from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_analysis import (
+    animate_bag,
     JOINT_TOPIC,
     metrics_table,
     plot_runs,
@@ -52,8 +56,14 @@ RUN_TOPICS = {
     '/wheel_velocity_controller/commands': 'std_msgs/msg/Float64MultiArray',
     '/controller_state': 'std_msgs/msg/Float64MultiArray',
     '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray', '/rosout': 'rcl_interfaces/msg/Log',
+    '/reference_path': 'nav_msgs/msg/Path',
+    '/robot_markers': 'visualization_msgs/msg/MarkerArray',
 }
+#: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
+LATCHED_TOPICS = ('/reference_path',)
 STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
+STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
+TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 LOCKSTEP_ODOM_TIMEOUT = 2.0  # [s] the controller's odometry timeout in lockstep runs
 
 
@@ -87,6 +97,8 @@ class RunOptions:
         Stop the run when simulated time has not advanced for this long (wall clock) [s].
     no_compare : bool
         Skip the in-process pybullet and kinematic runs of the end table.
+    animate : bool
+        Also write ``run.gif``, an animation of the robot from the bag, into the run folder.
 
     """
 
@@ -99,6 +111,7 @@ class RunOptions:
     hold_from: float
     stall_timeout: float
     no_compare: bool
+    animate: bool = False
 
 
 def run(options: RunOptions) -> int:
@@ -108,8 +121,9 @@ def run(options: RunOptions) -> int:
     Returns
     -------
     int
-        The exit status: 0, 1 when a child died or the run stalled (:class:`RunError`,
-        printed with the child's log tail), 130 when interrupted.
+        The exit status: 0, 1 when a child died, a controller transition failed or the run
+        stalled (:class:`RunError`, printed with the child's log tail), 130 when
+        interrupted.
 
     Raises
     ------
@@ -133,9 +147,11 @@ def run(options: RunOptions) -> int:
     recorder = None
     executor = EventsExecutor()  # several times less CPU per message than the default
     if writer is not None:
-        recorder = RecorderNode(writer, RUN_TOPICS, parameter_overrides=[
-            Parameter('use_sim_time', value=True)])
+        recorder = RecorderNode(writer, RUN_TOPICS, latched=LATCHED_TOPICS,
+                                parameter_overrides=[Parameter('use_sim_time', value=True)])
         executor.add_node(recorder)
+    manager = rclpy.create_node('nfmr_run')  # the controller's lifecycle client
+    executor.add_node(manager)
     children = []
     status = 0
     clock = _ClockWatch(recorder, executor)
@@ -144,12 +160,18 @@ def run(options: RunOptions) -> int:
         children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
                                  run_dir),
                     _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
-                                 _controller_args(config, options.mode), run_dir)]
+                                 _controller_args(config, options), run_dir)]
+        controller = _ControllerLifecycle(manager, clock, children, stop)
+        # The sim starts stepping once the controller subscribes to odometry: when active.
+        controller.wait_until_up()
+        controller.change('configure')
+        controller.change('activate')
         _wait_for_run(children, clock, options.duration, options.stall_timeout, stop)
         # The sim has stopped stepping at the duration: let the last command arrive, then
-        # stop the controller well within its odometry timeout, so that a run that ended as
-        # planned ends without a safety stop.
+        # stop the controller (zero speed) well within its odometry timeout, so that a run
+        # that ended as planned ends without a safety stop.
         clock.spin(0.3)
+        controller.change('deactivate')
         _stop_children(children[1:])
         clock.spin(0.7)  # the sim's last messages
     except KeyboardInterrupt:
@@ -167,6 +189,8 @@ def run(options: RunOptions) -> int:
             recorder.close()
             executor.remove_node(recorder)
             recorder.destroy_node()
+        executor.remove_node(manager)
+        manager.destroy_node()
         rclpy.try_shutdown()
         stop.release()
     if writer is not None and status == 0:
@@ -184,14 +208,15 @@ def _sim_args(config: Path, options: RunOptions) -> list[str]:
             '-p', f'max_time:={float(options.duration)!r}']
 
 
-def _controller_args(config: Path, mode: str) -> list[str]:
-    """Return the controller's ROS arguments."""
-    if mode == 'realtime':
-        return ['--ros-args', '--params-file', str(config), '-p', 'tick_source:=clock']
+def _controller_args(config: Path, options: RunOptions) -> list[str]:
+    """Return the controller's ROS arguments: no autostart, the path over the run."""
+    args = ['--ros-args', '--params-file', str(config), '-p', 'autostart:=false',
+            '-p', f'path_horizon:={float(options.duration)!r}']
+    if options.mode == 'realtime':
+        return [*args, '-p', 'tick_source:=clock']
     # In lockstep a slow step on a busy machine is no fault: only a sim that stopped for
     # good should stop the robot.
-    return ['--ros-args', '--params-file', str(config),
-            '-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
+    return [*args, '-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
 
 
 @dataclass
@@ -256,7 +281,7 @@ def _stop_children(children: list) -> None:
 
 
 class _ClockWatch:
-    """Spins the recorder and tracks simulated time from /clock."""
+    """Spins the launcher's nodes and tracks simulated time from /clock."""
 
     def __init__(self, recorder, executor):
         self.recorder = recorder
@@ -264,10 +289,7 @@ class _ClockWatch:
         self.started = time.monotonic()
 
     def spin(self, seconds: float) -> None:
-        """Spin the recorder (or sleep without one) for ``seconds`` [s]."""
-        if self.recorder is None:
-            time.sleep(seconds)
-            return
+        """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
@@ -355,11 +377,7 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     while True:
         clock.spin(0.05)
         stop.check()
-        for child in children:
-            code = child.process.poll()
-            if code is not None:
-                raise RunError(f'{child.name} exited with code {code}; last lines of '
-                               f'{child.log}:\n{child.tail()}')
+        _check_children(children)
         now = time.monotonic()
         sim_t = clock.sim_time
         if sim_t != progress_time:
@@ -381,6 +399,120 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         if sim_t >= duration:
             break
     print(file=sys.stderr)
+
+
+def _check_children(children: list) -> None:
+    """
+    Raise if a child exited.
+
+    Raises
+    ------
+    RunError
+        Naming the child, its exit code and the last lines of its log.
+
+    """
+    for child in children:
+        code = child.process.poll()
+        if code is not None:
+            raise RunError(f'{child.name} exited with code {code}; last lines of '
+                           f'{child.log}:\n{child.tail()}')
+
+
+class _ControllerLifecycle:
+    """
+    The controller's lifecycle transitions, asked for over its services.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The launcher's node the service clients belong to (spun by ``clock``).
+    clock : _ClockWatch
+        Spins the launcher's nodes while waiting.
+    children : list of _Child
+        The sim, then the controller: a child that exits meanwhile ends the wait.
+    stop : _StopRequest
+        Ctrl-C and SIGTERM end the wait.
+
+    """
+
+    def __init__(self, node, clock: _ClockWatch, children: list, stop: _StopRequest):
+        self._node = node
+        self._clock = clock
+        self._children = children
+        self._stop = stop
+        self._change = node.create_client(ChangeState, '/controller/change_state')
+        self._get = node.create_client(GetState, '/controller/get_state')
+
+    def _wait(self, done, timeout: float) -> bool:
+        """
+        Spin until ``done()``, at most ``timeout`` [s]; return ``done()``.
+
+        Raises
+        ------
+        RunError
+            A child exited.
+        KeyboardInterrupt
+            A stop was requested.
+
+        """
+        end = time.monotonic() + timeout
+        while not done():
+            self._stop.check()
+            _check_children(self._children)
+            if time.monotonic() > end:
+                return False
+            self._clock.spin(0.02)
+        return True
+
+    def wait_until_up(self) -> None:
+        """
+        Wait until the controller answers on its lifecycle services and the sim publishes.
+
+        A request sent while the controller's answer cannot reach this node yet (DDS is
+        still matching them) is lost: ``get_state``, which changes nothing, is asked until
+        it is answered, so that no transition request is lost.
+
+        Raises
+        ------
+        RunError
+            A child exited, or they were not up within STARTUP_TIMEOUT.
+
+        """
+        deadline = time.monotonic() + STARTUP_TIMEOUT
+        ready = self._wait(lambda: self._get.service_is_ready() and
+                           self._change.service_is_ready() and
+                           self._node.count_publishers('/odom') > 0, STARTUP_TIMEOUT)
+        while ready:
+            future = self._get.call_async(GetState.Request())
+            if self._wait(future.done, 1.0):
+                return
+            self._get.remove_pending_request(future)
+            ready = time.monotonic() < deadline
+        raise RunError(f'the controller and the sim were not up within {STARTUP_TIMEOUT:g} s '
+                       '(the controller answering its lifecycle services, the sim publishing '
+                       'odometry)')
+
+    def change(self, transition: str) -> None:
+        """
+        Ask the controller for ``transition`` (``configure``, ``activate``, ...).
+
+        Raises
+        ------
+        RunError
+            Naming the transition when it failed, with the controller's log tail, or when
+            no answer came within TRANSITION_TIMEOUT.
+
+        """
+        request = ChangeState.Request()
+        request.transition.label = transition
+        future = self._change.call_async(request)
+        if not self._wait(future.done, TRANSITION_TIMEOUT):
+            raise RunError(f"controller transition '{transition}' got no answer within "
+                           f'{TRANSITION_TIMEOUT:g} s')
+        if not future.result().success:
+            controller = self._children[1]
+            raise RunError(f"controller transition '{transition}' failed; last lines of "
+                           f'{controller.log}:\n{controller.tail()}')
 
 
 def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> None:
@@ -413,3 +545,16 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> 
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
+    if options.animate:
+        _animate(bag_dir, run_dir / 'run.gif')
+
+
+def _animate(bag_dir: Path, out: Path) -> None:
+    """Write the animation of the run, showing progress on stderr."""
+    def progress(done, total):
+        if done == total or done % 25 == 0:
+            print(f'\ranimation: frame {done} / {total}', end='', file=sys.stderr, flush=True)
+
+    made = animate_bag(bag_dir, out, progress=progress)
+    print(f"\nanimation: {out} ({made['frames']} frames, {made['seconds']:.1f} s of output) "
+          f"in {made['wall_s']:.1f} s", file=sys.stderr)

@@ -1,23 +1,25 @@
 """
 Declaring a node's parameters from their schema and reading them back (rclpy).
 
-A :class:`SchemaNode` is created with ``automatically_declare_parameters_from_overrides``:
-rclpy then declares every value given to it (``--params-file``, ``-p``,
-``parameter_overrides``) under its own type, which is how this module learns, through
-public rclpy calls only, what was given. :func:`_declare_parameters` checks each against
-the schema (:mod:`nfmr_dlsmc.core.schema`: its name, its type) and declares it again with
-the schema's type and descriptor (description with the unit, rule, read-only flag).
+A :class:`SchemaNode` (or, managed, a :class:`SchemaLifecycleNode`) is created with
+``automatically_declare_parameters_from_overrides``: rclpy then declares every value given
+to it (``--params-file``, ``-p``, ``parameter_overrides``) under its own type, which is how
+this module learns, through public rclpy calls only, what was given.
+:func:`_declare_parameters` checks each against the schema (:mod:`nfmr_dlsmc.core.schema`:
+its name, its type) and declares it again with the schema's type and descriptor
+(description with the unit, rule, read-only flag).
 """
 
 from nfmr_dlsmc.core.schema import Param, unknown_parameter
 from nfmr_dlsmc.core.validation import ParameterError
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.lifecycle import LifecycleNode
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 
-__all__ = ['SchemaNode', 'plain_value']
+__all__ = ['SchemaLifecycleNode', 'SchemaNode', 'SchemaNodeMixin', 'plain_value']
 
 #: Parameters rclpy declares on every node itself.
 _RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
@@ -27,9 +29,13 @@ _ROS_TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
               list: Parameter.Type.DOUBLE_ARRAY}
 
 
-class SchemaNode(Node):
+class SchemaNodeMixin:
     """
-    A node whose parameters are declared from their schema, as given to it.
+    Declares a node's parameters from their schema, as given to it: mixed into a node class.
+
+    It comes before the rclpy node class among the bases (:class:`SchemaNode`,
+    :class:`SchemaLifecycleNode`) and creates that node, taking ``params`` before its
+    keyword arguments.
 
     rclpy cannot declare an empty list given in a parameter file or by ``-p`` (it arrives
     without a type): the node refuses it as a :class:`ParameterError` instead of rclpy's
@@ -53,6 +59,14 @@ class SchemaNode(Node):
                                  'list (rclpy cannot declare one): leave it out, arrays '
                                  'default to []') from None
         self.parameter_values = _declare_parameters(self, params)
+
+
+class SchemaNode(SchemaNodeMixin, Node):
+    """A node whose parameters are declared from their schema (:class:`SchemaNodeMixin`)."""
+
+
+class SchemaLifecycleNode(SchemaNodeMixin, LifecycleNode):
+    """A managed (lifecycle) node whose parameters are declared from their schema."""
 
 
 def _declare_parameters(node: Node, params: list[Param]) -> dict:

@@ -3,7 +3,11 @@ ROS 2 node ``recorder``: every topic of a run, as published bytes, into a BagWri
 
 Subscriptions are raw (the CDR bytes are never deserialised) and mirror the offered
 reliability and durability. Known topics are subscribed at once; others are discovered
-every ``discovery_period``. A writer thread drains the receive queue so callbacks stay short.
+every ``discovery_period`` (wall clock) and subscribed with the QoS their publishers offer.
+So are the known topics marked latched, whose publishers keep the last message for
+subscribers that come later (durability transient local): subscribed transient local once
+the publisher is seen, the recorder still receives a message published before. A writer
+thread drains the receive queue so callbacks stay short.
 """
 
 import importlib
@@ -11,6 +15,7 @@ import queue
 import threading
 
 from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+from rclpy.clock import Clock as NodeClock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -37,12 +42,17 @@ class RecorderNode(Node):
     known_topics : dict
         Topic -> type name, subscribed immediately (so the first messages are not missed).
     discovery_period : float
-        How often the graph is searched for further topics [s].
+        How often the graph is searched for further topics [s, wall clock].
+    latched : collection of str
+        Topics of ``known_topics`` whose publishers offer durability transient local: they
+        are subscribed once discovered, with the offered QoS (a volatile subscription made
+        before would miss a message published before it matched the publisher, and one
+        made transient local would not match a volatile publisher).
 
     """
 
     def __init__(self, writer: BagWriter, known_topics: dict, discovery_period: float = 0.25,
-                 **kwargs):
+                 latched=(), **kwargs):
         super().__init__('recorder', **kwargs)
         self.writer = writer
         self._queue = queue.SimpleQueue()
@@ -50,8 +60,12 @@ class RecorderNode(Node):
         self.received = 0
         self.last_clock_ns = 0
         for topic, type_name in known_topics.items():
-            self._subscribe(topic, type_name, None)
-        self.create_timer(discovery_period, self._discover)
+            if topic not in latched:
+                self._subscribe(topic, type_name, None)
+        # On the wall clock: under use_sim_time a timer of the node clock would wait for the
+        # simulated time to run.
+        self.create_timer(discovery_period, self._discover,
+                          clock=NodeClock(clock_type=ClockType.STEADY_TIME))
         self._writer_thread = threading.Thread(target=self._drain, name='bag-writer', daemon=True)
         self._writer_thread.start()
 

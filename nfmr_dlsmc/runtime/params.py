@@ -94,6 +94,12 @@ class NodeOptions:
     restart_threshold: float = param(1.0, 's', 'a stamp this far off the time base, three '
                                      'messages in a row, means the source restarted: '
                                      'tracking starts over (doc/design.md, D10)', POSITIVE)
+    autostart: bool = param(True, '', 'configure at start and activate once spinning; false: '
+                            'stay unconfigured until the lifecycle transitions (nfmr-run drives '
+                            'them)', FLAG, read_only=True)
+    path_horizon: float = param(100.0, 's', 'reference_path covers the trajectory from t = 0 '
+                                'to this, a pose every 0.05 s (at most 20001 poses: evenly '
+                                'beyond 1000 s)', POSITIVE, read_only=True)
 
     def __post_init__(self):
         check_fields(self)

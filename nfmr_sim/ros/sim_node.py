@@ -3,12 +3,24 @@ ROS 2 node ``sim``: the pybullet chassis world behind topics.
 
 Publishes ``/clock`` and ``odom`` (pose and twist of P, ``odom`` -> ``base_link``) every
 physics step; ``joint_states``, ``ground_truth`` (true odometry of P) and
-``disturbance_active`` every ``aux_publish_every`` steps. Subscribes to
-``steer_position_controller/commands`` [rad] and ``wheel_velocity_controller/commands``
-[rad/s] (std_msgs/Float64MultiArray, FL FR RL RR) and, alternatively, ``cmd_vel``
-(geometry_msgs/Twist of P, mapped through the steering geometry). Malformed, non-finite or
-out-of-limit commands (see :mod:`nfmr_sim.command_gate`), or missing ones, brake the
-wheels; the reason is logged once.
+``disturbance_active`` every ``aux_publish_every`` steps; ``robot_markers`` (the chassis, the
+wheels at their measured steer angles and P, at the true pose:
+:func:`~nfmr_dlsmc.ros.scene.robot_markers`) ``marker_rate`` times per simulated second. The
+pose covariance of ``odom`` holds the variances of the configured odometry noise
+(:func:`~nfmr_sim.ros.messages.odometry_covariance`), that of ``ground_truth`` is zero.
+Subscribes to ``steer_position_controller/commands`` [rad] and
+``wheel_velocity_controller/commands`` [rad/s] (std_msgs/Float64MultiArray, FL FR RL RR)
+and, alternatively, ``cmd_vel`` (geometry_msgs/Twist of P, mapped through the steering
+geometry). Malformed, non-finite or out-of-limit commands (see :mod:`nfmr_sim.command_gate`),
+or missing ones, brake the wheels; the reason is logged once.
+
+Services, in both modes: ``~/reset`` (std_srvs/Trigger) puts P back at ``initial_pose`` at
+rest, wheels straight, and forgets the commands received, so that the wheels brake until the
+next one; the simulated time runs on (a /clock going back would break every node on sim
+time), and so does the disturbance schedule. ``~/pause`` (std_srvs/SetBool) with ``data``
+true stops stepping (no /clock, no odometry: a lockstep controller simply waits), false
+resumes; asking for the state the sim is in already succeeds and says so. Both act between
+two physics steps.
 
 The parameters their schema does not mark read-only
 (:func:`~nfmr_sim.sim_params.sim_parameters`) may be changed while the sim runs: a change
@@ -24,11 +36,13 @@ import time
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
+from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
+from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
-from nfmr_sim.ros.messages import odometry_message, time_message
+from nfmr_sim.ros.messages import odometry_covariance, odometry_message, time_message
 from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
 from rcl_interfaces.msg import SetParametersResult
@@ -36,6 +50,14 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64MultiArray
+from std_srvs.srv import SetBool, Trigger
+from visualization_msgs.msg import MarkerArray
+
+#: Wall time [s] between two looks at a lockstep step's command, so that the step waits on
+#: the command gate in force after a reset.
+GATE_POLL = 0.01
+#: Wall time [s] between two looks at whether the node stops while the sim is paused.
+PAUSE_POLL = 0.05
 
 
 class SimNode(SchemaNode):
@@ -51,15 +73,18 @@ class SimNode(SchemaNode):
         world_cfg = self.settings.world
         self.world = ChassisWorld(world_cfg, gui=self.settings.gui)
         self.world.reset(self.settings.initial_pose)
-        self.gate = CommandGate(self.settings.command_timeout, world_cfg.chassis,
-                                world_cfg.tracked_point_offset,
-                                world_cfg.motors.max_wheel_speed)
+        self.gate = self._new_gate()
+        self._footprint = Footprint.of(world_cfg.chassis, world_cfg.chassis.wheel_width)
+        self._odom_covariance = self._covariance_of(world_cfg)
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, '/clock', reliable)
         self._odom_pub = self.create_publisher(Odometry, 'odom', reliable)
         self._truth_pub = self.create_publisher(Odometry, 'ground_truth', reliable)
         self._joint_pub = self.create_publisher(JointState, 'joint_states', reliable)
         self._dist_pub = self.create_publisher(Bool, 'disturbance_active', reliable)
+        self._marker_pub = self.create_publisher(
+            MarkerArray, 'robot_markers',
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(Float64MultiArray, STEER_TOPIC,
                                  lambda m: self.gate.offer_steer(m.data, self.world.time),
                                  reliable)
@@ -69,6 +94,13 @@ class SimNode(SchemaNode):
         self.create_subscription(Twist, TWIST_TOPIC, self._on_twist, reliable)
         self._pending = None  # settings of an accepted live change, for the next step
         self._pending_lock = threading.Lock()
+        # Held by the step thread while it changes the world or the gate (a live change, a
+        # step and its messages) and by the services, which thus act between two steps;
+        # notified when the sim resumes.
+        self._control = threading.Condition()
+        self._paused = False
+        self.create_service(Trigger, '~/reset', self._on_reset)
+        self.create_service(SetBool, '~/pause', self._on_pause)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stepper = LoopThread(self._loop, 'step', node=self)
         self.steps = 0
@@ -76,6 +108,48 @@ class SimNode(SchemaNode):
 
     def _on_twist(self, msg: Twist) -> None:
         self.gate.offer_twist(msg.linear.x, msg.linear.y, msg.angular.z, self.world.time)
+
+    def _new_gate(self) -> CommandGate:
+        """Return a command gate of the current settings that has received no command."""
+        s = self.settings
+        return CommandGate(s.command_timeout, s.world.chassis, s.world.tracked_point_offset,
+                           s.world.motors.max_wheel_speed)
+
+    @staticmethod
+    def _covariance_of(world_cfg):
+        """Return the covariances of ``odom`` under the world's odometry noise."""
+        d = world_cfg.disturbance
+        return odometry_covariance(d.odom_position_noise, d.odom_yaw_noise)
+
+    # -- services ---------------------------------------------------------------------------
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
+        """Put P back at ``initial_pose`` at rest and forget the commands; time runs on."""
+        x, y, yaw = self.settings.initial_pose
+        with self._control:
+            self.world.reset((x, y, yaw), keep_time=True)
+            self.gate = self._new_gate()
+            now = self.world.time
+        response.success = True
+        response.message = (f'reset to initial_pose ({x:g} m, {y:g} m, {yaw:g} rad) at '
+                            f'{now:.3f} s of simulated time; braking until the next command')
+        self.get_logger().info(response.message)
+        return response
+
+    def _on_pause(self, request: SetBool.Request, response: SetBool.Response):
+        """Pause stepping (``data`` true) or resume it (false)."""
+        with self._control:
+            already = self._paused == request.data
+            self._paused = request.data
+            self._control.notify_all()
+            now = self.world.time
+        state = 'paused' if request.data else 'running'
+        response.success = True
+        response.message = (f"{'already ' if already else ''}{state} at {now:.3f} s of "
+                            f'simulated time')
+        if not already:
+            self.get_logger().info(response.message)
+        return response
 
     # -- parameters -------------------------------------------------------------------------
 
@@ -110,7 +184,7 @@ class SimNode(SchemaNode):
         return SetParametersResult(successful=True)
 
     def _apply_pending(self) -> None:
-        """Step thread: take over the settings of an accepted live change, if any."""
+        """Step thread, holding ``_control``: take over the settings of a live change, if any."""
         with self._pending_lock:
             pending, self._pending = self._pending, None
         if pending is None:
@@ -119,6 +193,7 @@ class SimNode(SchemaNode):
         # Differs in live values only: disturbance.* the world reads at every step, and
         # motors.max_wheel_speed, which the gate applies.
         self.world.config = pending.world
+        self._odom_covariance = self._covariance_of(pending.world)
         self.settings = pending
 
     # -- stepping ---------------------------------------------------------------------------
@@ -140,43 +215,75 @@ class SimNode(SchemaNode):
                     self.count_subscribers('odom') < s.start_after_subscribers):
                 time.sleep(0.01)
             time.sleep(0.2)  # let the matched readers settle before the first message
-        out = self.world.observe()
-        self._publish(out, aux=True)
+        with self._control:
+            self._hold_while_paused()
+            self._publish(self.world.observe(), aux=True)
         start = time.monotonic()
         while self._stepper.running.is_set():
-            self._apply_pending()
+            with self._control:
+                self._apply_pending()
             s = self.settings
             if s.max_time and self.world.time >= s.max_time - 0.5 * dt:
                 self.get_logger().info(f'reached max_time {s.max_time:g} s: stepping stopped')
                 return  # the node stays up, so everything published so far is delivered
             if s.mode == 'lockstep':
-                self.gate.wait_for_step_command(s.lockstep_timeout)
+                self._wait_for_step_command(s.lockstep_timeout)
             else:
                 delay = start + (self.steps + 1) * dt - time.monotonic()
                 if delay > 0.0:
                     time.sleep(delay)
-            command, report = self.gate.take(self.world.time)
-            if report and command is None:
-                self.get_logger().warning(report)
-            elif report:
-                self.get_logger().info(report)
-            if command is None:
-                self.world.brake()
-            else:
-                self.world.set_wheel_commands(*command)
-            out = self.world.step()
-            self.steps += 1
-            try:
-                self._publish(out, aux=self.steps % s.aux_publish_every == 0)
-            except Exception:
-                if self.context.ok():
-                    raise
-                return  # shutting down (e.g. Ctrl-C): the context went first
+            with self._control:
+                if self._paused:
+                    self._hold_while_paused()
+                    start = time.monotonic() - self.steps * dt  # realtime: no catching up
+                    continue
+                if not self._step():
+                    return
+
+    def _wait_for_step_command(self, timeout: float) -> None:
+        """Lockstep: wait up to ``timeout`` wall seconds for a command on the gate in force."""
+        deadline = time.monotonic() + timeout
+        while self._stepper.running.is_set():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0.0 or self.gate.wait_for_step_command(min(remaining, GATE_POLL)):
+                return
+
+    def _hold_while_paused(self) -> None:
+        """Step thread, holding ``_control``: return once the sim runs (or the node stops)."""
+        while self._paused and self._stepper.running.is_set():
+            self._control.wait(PAUSE_POLL)
+
+    def _step(self) -> bool:
+        """Step thread, holding ``_control``: one physics step; False when shutting down."""
+        command, report = self.gate.take(self.world.time)
+        if report and command is None:
+            self.get_logger().warning(report)
+        elif report:
+            self.get_logger().info(report)
+        if command is None:
+            self.world.brake()
+        else:
+            self.world.set_wheel_commands(*command)
+        out = self.world.step()
+        self.steps += 1
+        try:
+            self._publish(out, aux=self.steps % self.settings.aux_publish_every == 0)
+        except Exception:
+            if self.context.ok():
+                raise
+            return False  # shutting down (e.g. Ctrl-C): the context went first
+        return True
 
     def _publish(self, out, aux: bool) -> None:
         stamp = time_message(out.time)
         self._clock_pub.publish(Clock(clock=stamp))
-        self._odom_pub.publish(odometry_message(out.odometry, stamp))
+        self._odom_pub.publish(odometry_message(out.odometry, stamp, self._odom_covariance))
+        every = self.settings.marker_every
+        if every and self.steps % every == 0:
+            p, chassis = out.point_p, self.world.config.chassis
+            self._marker_pub.publish(robot_markers(
+                stamp, self._footprint, chassis, (p.x, p.y, p.yaw), out.joint_position[:4],
+                p_offset_m=self.world.config.tracked_point_offset))
         if not aux:
             return
         self._truth_pub.publish(odometry_message(out.point_p, stamp))
