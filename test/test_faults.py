@@ -395,3 +395,50 @@ def test_each_node_ends_at_once_on_a_signal_while_they_run_together(sig):
         for proc in procs.values():
             if proc.poll() is None:
                 proc.kill()
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
+    """Ctrl-C or SIGTERM of a controller that is driving: its shutdown commands zero speed."""
+    from geometry_msgs.msg import Twist
+    from nav_msgs.msg import Odometry
+
+    context = new_context()
+    peer = Node('signal_peer', context=context)
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    odom = peer.create_publisher(Odometry, 'odom', qos)
+    replies = []
+    peer.create_subscription(Twist, 'cmd_vel', lambda m: replies.append(
+        (time.monotonic(), m.linear.x, m.angular.z)), qos)
+    spinner = Spinner(context, peer)
+    controller = subprocess.Popen([str(Path(sys.executable).parent / 'controller'),
+                                   '--ros-args', '-p', 'odom_timeout:=30.0'],
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        wait_for(lambda: peer.count_subscribers('odom') > 0 and
+                 peer.count_publishers('cmd_vel') > 0, timeout=30, what='discovery')
+        time.sleep(0.5)
+        for k in range(1, 21):  # P at (1, 4, 0), far from the sine: the robot is driven
+            msg = Odometry()
+            msg.header.frame_id = 'odom'
+            msg.header.stamp.nanosec = k * 1_000_000
+            msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
+            msg.pose.pose.orientation.w = 1.0
+            n = len(replies)
+            odom.publish(msg)
+            wait_for(lambda: len(replies) > n, timeout=5, what='a reply')
+        assert replies[-1][1] > 0.1
+        n = len(replies)
+        sent = time.monotonic()
+        controller.send_signal(sig)
+        out, _ = controller.communicate(timeout=10)
+        assert controller.returncode == 0 and 'Traceback' not in out, out
+        wait_for(lambda: len(replies) > n, timeout=2, what='the stop command')
+        assert replies[n:] == [(replies[n][0], 0.0, 0.0)]  # one zero command, nothing else
+        assert replies[n][0] - sent < 1.0
+    finally:
+        if controller.poll() is None:
+            controller.kill()
+        spinner.close()
+        peer.destroy_node()
+        context.try_shutdown()

@@ -8,6 +8,7 @@ traceback.
 """
 
 from pathlib import Path
+import signal
 import sys
 import threading
 import traceback
@@ -17,10 +18,15 @@ from nfmr_dlsmc.runtime.params import read_yaml
 from nfmr_dlsmc.runtime.user_errors import report_user_error
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 
 class RosArgumentsError(NfmrError):
     """ROS arguments that rclpy refuses to start with."""
+
+
+#: Longest wait of the spin loop [s]: a signal is acted on within it.
+_SPIN_TIMEOUT = 0.1
 
 
 def run_node(prog: str, factory, args=None) -> int:
@@ -44,17 +50,24 @@ def run_node(prog: str, factory, args=None) -> int:
         ``failure`` (printed).
 
     """
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         node = _create_node(factory, args)
     except NfmrError as exc:
         rclpy.try_shutdown()
         return report_user_error(prog, exc)
+    except KeyboardInterrupt:  # stopped while starting
+        rclpy.try_shutdown()
+        return 0
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     node.start()
     code = 0
     try:
-        executor.spin()
+        # Ctrl-C and SIGTERM end the spin here, with the context still valid, so that
+        # destroying the node can still publish (the controller's zero command on shutdown).
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:
@@ -91,11 +104,15 @@ def _create_node(factory, args):
         if arg == '--params-file':
             read_yaml(argv[k + 1])
     try:
-        rclpy.init(args=args)
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:  # rclpy reports bad ROS arguments as RCLError
         raise RosArgumentsError(
             f'cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}') from None
     return factory()
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def _describe_failure(exc: BaseException) -> str:
