@@ -424,7 +424,13 @@ class ControllerNode(SchemaLifecycleNode):
     def destroy_node(self):
         """Shut down as the lifecycle defines (zero speed once if active), then destroy."""
         if self.context.ok() and self.lifecycle_state in ('unconfigured', 'inactive', 'active'):
-            self.trigger_shutdown()
+            try:
+                self.trigger_shutdown()
+            except Exception:  # rclpy's RCLError: "publisher's context is invalid"
+                # The context went down meanwhile (a fatal loop failure shuts it): nothing
+                # can be published any more, which is that shutdown, not a new failure.
+                if self.context.ok():
+                    raise
         self.stop()
         return super().destroy_node()
 
