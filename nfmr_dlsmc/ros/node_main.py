@@ -50,29 +50,29 @@ def run_node(prog: str, factory, args=None) -> int:
         ``failure`` (printed).
 
     """
-    signal.signal(signal.SIGTERM, _interrupt)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
     try:
         node = _create_node(factory, args)
     except NfmrError as exc:
         rclpy.try_shutdown()
         return report_user_error(prog, exc)
-    except KeyboardInterrupt:  # stopped while starting
-        rclpy.try_shutdown()
-        return 0
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     node.start()
     code = 0
     try:
-        # Ctrl-C and SIGTERM end the spin here, with the context still valid, so that
-        # destroying the node can still publish (the controller's zero command on shutdown).
-        while rclpy.ok():
+        # Ctrl-C and SIGTERM only set ``stop`` (an exception raised by a handler could land
+        # inside one of rclpy's calls): the spin ends here, with the context still valid, so
+        # that destroying the node can still publish (the controller's zero command).
+        while rclpy.ok() and not stop.is_set():
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:
-        # A callback caught publishing while SIGINT/SIGTERM shut the context down raises
-        # "publisher's context is invalid": that is the shutdown, not a failure.
+        # A callback caught publishing while the context was shut down (as a fatal loop
+        # failure does) raises "publisher's context is invalid": not a new failure.
         if rclpy.ok():
             raise
     finally:
@@ -109,10 +109,6 @@ def _create_node(factory, args):
         raise RosArgumentsError(
             f'cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}') from None
     return factory()
-
-
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt
 
 
 def _describe_failure(exc: BaseException) -> str:
