@@ -9,7 +9,6 @@ from dataclasses import replace
 
 from nfmr_dlsmc.analysis.comparison_metrics import run_metrics
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario, SCENARIOS
-from nfmr_dlsmc.analysis.run_setup import quiet_stdout
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.gains import InputLimits
 from nfmr_dlsmc.runtime.params import load_gain_blocks
@@ -70,7 +69,7 @@ def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
     ``progress(done, total, key)`` follows each finished run.
     """
     metrics, series = {}, {}
-    with worker_pool(jobs, quiet_stdout) as pool:
+    with worker_pool(jobs, quiet=True) as pool:
         futures = [pool.submit(_run_task, task) for task in tasks]
         for done, future in enumerate(as_completed(futures), 1):
             key, run_metrics_, run_series = future.result()

@@ -18,7 +18,6 @@ from concurrent.futures import as_completed
 import math
 from pathlib import Path
 
-from nfmr_dlsmc.analysis.run_setup import quiet_stdout
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, simulation_metrics
@@ -83,7 +82,7 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     tasks = [(tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
               hold_last, world, params.geometry, params.steering) for x0 in starts.tolist()]
     rows = [None] * len(tasks)
-    with worker_pool(jobs, quiet_stdout) as pool:
+    with worker_pool(jobs, quiet=True) as pool:
         futures = {pool.submit(_run_start, task): k for k, task in enumerate(tasks)}
         for done, future in enumerate(as_completed(futures), 1):
             k = futures[future]

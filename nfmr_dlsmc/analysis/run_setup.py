@@ -1,12 +1,11 @@
 """
 What the commands that simulate share.
 
-The pybullet world a parameter file describes, random starts around a trajectory's
-start, and worker processes with a quiet stdout.
+The pybullet world a parameter file describes and random starts around a trajectory's
+start.
 """
 
 import math
-import os
 
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
@@ -76,15 +75,3 @@ def random_starts(rng: np.random.Generator, origin: np.ndarray, half_range, n: i
 
     """
     return origin + rng.uniform(-1.0, 1.0, (n, 3)) * np.asarray(half_range)
-
-
-def quiet_stdout() -> None:
-    """
-    Point this process's file descriptor 1 at /dev/null.
-
-    The initializer of worker processes: a worker's pybullet prints its build time and
-    argv on stdout, where the commands print only their results.
-    """
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    os.close(devnull)

@@ -18,7 +18,6 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
-import threading
 import time
 
 from lifecycle_msgs.srv import ChangeState, GetState
@@ -29,6 +28,7 @@ from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_analysis import (
     animate_bag,
@@ -155,7 +155,7 @@ def run(options: RunOptions) -> int:
     children = []
     status = 0
     clock = _ClockWatch(recorder, executor)
-    stop = _StopRequest()
+    stop = StopRequest()
     try:
         children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
                                  run_dir),
@@ -328,39 +328,8 @@ def _robot_mismatch(params, settings) -> str | None:
     return None
 
 
-class _StopRequest:
-    """
-    Ctrl-C and SIGTERM noted by a flag and acted on between spins.
-
-    Raised at once, the interrupt could land inside a recorder callback halfway through
-    writing the bag; noted, the run loop ends the run from one place and the bag is closed
-    whole.
-    """
-
-    def __init__(self):
-        self.requested = False
-        self._previous = {}
-        if threading.current_thread() is threading.main_thread():
-            for signum in (signal.SIGINT, signal.SIGTERM):
-                self._previous[signum] = signal.signal(signum, self._note)
-
-    def _note(self, signum, frame) -> None:
-        self.requested = True
-
-    def check(self) -> None:
-        """Raise KeyboardInterrupt if a stop was requested."""
-        if self.requested:
-            raise KeyboardInterrupt
-
-    def release(self) -> None:
-        """Give the signals back to the handlers they had before."""
-        for signum, handler in self._previous.items():
-            signal.signal(signum, handler)
-        self._previous = {}
-
-
 def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
-                  stall_timeout: float, stop: _StopRequest) -> None:
+                  stall_timeout: float, stop: StopRequest) -> None:
     """
     Spin until the sim reaches ``duration``, showing progress.
 
@@ -430,12 +399,12 @@ class _ControllerLifecycle:
         Spins the launcher's nodes while waiting.
     children : list of _Child
         The sim, then the controller: a child that exits meanwhile ends the wait.
-    stop : _StopRequest
+    stop : StopRequest
         Ctrl-C and SIGTERM end the wait.
 
     """
 
-    def __init__(self, node, clock: _ClockWatch, children: list, stop: _StopRequest):
+    def __init__(self, node, clock: _ClockWatch, children: list, stop: StopRequest):
         self._node = node
         self._clock = clock
         self._children = children

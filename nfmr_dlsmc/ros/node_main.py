@@ -50,9 +50,7 @@ def run_node(prog: str, factory, args=None) -> int:
         ``failure`` (printed).
 
     """
-    stop = threading.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+    stop = StopRequest()
     try:
         node = _create_node(factory, args)
     except NfmrError as exc:
@@ -63,10 +61,9 @@ def run_node(prog: str, factory, args=None) -> int:
     node.start()
     code = 0
     try:
-        # Ctrl-C and SIGTERM only set ``stop`` (an exception raised by a handler could land
-        # inside one of rclpy's calls): the spin ends here, with the context still valid, so
-        # that destroying the node can still publish (the controller's zero command).
-        while rclpy.ok() and not stop.is_set():
+        # The spin ends here on Ctrl-C or SIGTERM, with the context still valid, so that
+        # destroying the node can still publish (the controller's zero command).
+        while rclpy.ok() and not stop.requested:
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -109,6 +106,37 @@ def _create_node(factory, args):
         raise RosArgumentsError(
             f'cannot start: {type(exc).__name__}: {str(exc).splitlines()[0]}') from None
     return factory()
+
+
+class StopRequest:
+    """
+    Ctrl-C and SIGTERM noted by a flag, for a loop to act on between two spins.
+
+    A handler that raised at once could land inside one of rclpy's calls (a node's or the
+    recorder's callback, halfway through writing a bag); noted, the loop ends from one
+    place. Only the main thread can take the signals; elsewhere nothing is installed.
+    """
+
+    def __init__(self):
+        self.requested = False
+        self._previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self._previous[signum] = signal.signal(signum, self._note)
+
+    def _note(self, signum, frame) -> None:
+        self.requested = True
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if a stop was requested."""
+        if self.requested:
+            raise KeyboardInterrupt
+
+    def release(self) -> None:
+        """Give the signals back to the handlers they had before."""
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+        self._previous = {}
 
 
 def _describe_failure(exc: BaseException) -> str:

@@ -6,18 +6,21 @@ They stop at once on Ctrl-C or SIGTERM instead of finishing every queued run fir
 
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
+import os
 
 
 @contextmanager
-def worker_pool(jobs: int, initializer=None):
+def worker_pool(jobs: int, quiet: bool = False):
     """
     Run a :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes.
 
+    With ``quiet`` the workers' standard output goes to /dev/null: a worker's pybullet
+    prints its build time and argv there, where the commands print only their results.
     Leaving the block normally waits for the pool as usual; leaving it by an exception
     (KeyboardInterrupt included) cancels the queued runs and terminates the workers, so
     that an interrupted command ends within a second rather than after its last run.
     """
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=initializer)
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_quiet_stdout if quiet else None)
     try:
         yield pool
     except BaseException:
@@ -32,3 +35,10 @@ def worker_pool(jobs: int, initializer=None):
             process.join(timeout=5.0)
         raise
     pool.shutdown(wait=True)
+
+
+def _quiet_stdout() -> None:
+    """Point this process's file descriptor 1 at /dev/null."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
