@@ -48,7 +48,12 @@ class SimSettings:
     world: WorldConfig = field(default_factory=WorldConfig)
     mode: str = param('lockstep', '', 'lockstep: each physics step waits for its command (or '
                       'lockstep_timeout); realtime: steps follow the wall clock, never '
-                      'faster', one_of('lockstep', 'realtime'), read_only=True)
+                      'faster; a machine that cannot keep up slows the run down, no step is '
+                      'skipped', one_of('lockstep', 'realtime'), read_only=True)
+    realtime_max_lag: float = param(0.02, 's', 'realtime: the sim catches up a delay up to '
+                                    'this long by stepping without sleeping; beyond it the '
+                                    'run continues slower than real time (counted and '
+                                    'logged)', NON_NEGATIVE)
     lockstep_timeout: float = param(0.5, 's', 'wall time a lockstep step waits for its '
                                     'command', POSITIVE)
     command_timeout: float = param(0.1, 's', 'simulated time without a valid command after '

@@ -31,6 +31,38 @@ def wait_for(predicate, timeout=10.0, what='condition'):
         time.sleep(0.002)
 
 
+def settled(count, quiet=1.0, timeout=60.0):
+    """
+    Wait until ``count()`` has not changed for ``quiet`` seconds; return its value.
+
+    For what is still in flight after a publisher stopped: a fixed sleep would be too
+    short on a busy machine.
+    """
+    deadline = time.monotonic() + timeout
+    last, since = count(), time.monotonic()
+    while time.monotonic() - since < quiet:
+        assert time.monotonic() < deadline, 'never settled'
+        time.sleep(0.01)
+        now = count()
+        if now != last:
+            last, since = now, time.monotonic()
+    return last
+
+
+def wait_matched(*endpoints, timeout=30.0):
+    """
+    Wait until every publisher and subscription given has matched a peer over DDS.
+
+    The graph (``count_subscribers``) learns of a remote endpoint before the local one has
+    matched it; a message published in between is lost. The matched counts say when it no
+    longer is.
+    """
+    def matched(endpoint):
+        count = getattr(endpoint, 'get_subscription_count', None) or endpoint.get_publisher_count
+        return count() > 0
+    wait_for(lambda: all(matched(e) for e in endpoints), timeout, what='DDS matching')
+
+
 def new_context():
     context = rclpy.Context()
     rclpy.init(context=context)

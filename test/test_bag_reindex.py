@@ -91,3 +91,21 @@ def test_a_corrupted_chunk_ends_the_bag_where_it_starts(tmp_path):
     values = [deserialize_message(m.data, Float64MultiArray).data[0] for m in contents.messages]
     assert values == [float(k) for k in range(len(values))]  # every message read is intact
     assert reindex(bag).messages == len(values)
+
+
+def test_a_bag_killed_before_its_first_chunk_is_an_empty_mcap_file(tmp_path):
+    # The recorder killed right after opening the bag: magic and header are on disk already,
+    # so the readers say "empty" in one line rather than "not an MCAP file".
+    bag = tmp_path / 'bag'
+    writer = BagWriter(bag)  # never finished, never flushed by us
+    writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
+    on_disk = writer.path.read_bytes()
+    assert on_disk.startswith(b'\x89MCAP0\r\n')
+    contents = read_bag(bag)
+    assert contents.truncated and contents.messages == []
+    analyze = subprocess.run([str(Path(sys.executable).parent / 'nfmr-analyze'), str(bag)],
+                             capture_output=True, text=True, timeout=60)
+    assert analyze.returncode == 2 and 'no /controller_state messages' in analyze.stderr
+    assert 'not an MCAP file' not in analyze.stderr
+    proc = subprocess.run([REINDEX, str(bag)], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and 'no complete chunk to recover' in proc.stderr

@@ -5,6 +5,7 @@ Shipped files are never overwritten unless asked; Ctrl-C and SIGTERM end a comma
 once with exit 130 and no traceback.
 """
 
+import os
 from pathlib import Path
 import signal
 import subprocess
@@ -12,6 +13,7 @@ import sys
 import time
 
 import pytest
+from ros_helpers import wait_for
 
 BIN = Path(sys.executable).parent
 ROOT = Path(__file__).parents[1]
@@ -46,6 +48,20 @@ def test_a_shipped_file_is_replaced_only_with_force(command, shipped):
     assert (ROOT / shipped).read_bytes() == before
 
 
+def busy_workers(pid: int, cpu_seconds: float = 0.5) -> int:
+    """Return how many child processes of ``pid`` have computed for ``cpu_seconds``."""
+    children = subprocess.run(['pgrep', '-P', str(pid)], capture_output=True, text=True)
+    busy = 0
+    for child in children.stdout.split():
+        try:
+            fields = Path(f'/proc/{child}/stat').read_text().rsplit(')', 1)[1].split()
+        except OSError:
+            continue
+        ticks = int(fields[11]) + int(fields[12])  # utime + stime [clock ticks]
+        busy += ticks / os.sysconf('SC_CLK_TCK') >= cpu_seconds
+    return busy
+
+
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 @pytest.mark.parametrize('command, args', [
     ('nfmr-montecarlo', ['--plant', 'pybullet', '--n', '8', '--duration', '60', '--jobs', '2']),
@@ -54,7 +70,7 @@ def test_a_shipped_file_is_replaced_only_with_force(command, shipped):
 def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, sig):
     proc = subprocess.Popen([str(BIN / command), *(a.format(tmp=tmp_path) for a in args)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
-    time.sleep(4.0)  # the workers are running pybullet
+    wait_for(lambda: busy_workers(proc.pid) >= 2, timeout=120, what='workers running pybullet')
     sent = time.monotonic()
     proc.send_signal(sig)
     _, stderr = proc.communicate(timeout=30)

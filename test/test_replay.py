@@ -52,7 +52,8 @@ def replay_and_record(bag, out_dir, *args):
     recorder = RecorderNode(writer, TOPICS, context=context)
     spinner = Spinner(context, recorder)
     try:
-        proc = subprocess.run([REPLAY, str(bag), '--delay', '1.5', *args], capture_output=True,
+        proc = subprocess.run([REPLAY, str(bag), '--delay', '0', '--wait-for-subscribers', '1',
+                               *args], capture_output=True,
                               text=True, timeout=120)
         done = threading.Event()
         # Everything sent has arrived once the queue stays empty for a moment.
@@ -198,7 +199,8 @@ def test_every_recorded_topic_is_republished(topics, tmp_path):
         return [message for message in decoded if message in sent[topic]]
 
     try:
-        proc = subprocess.run([REPLAY, str(tmp_path / 'bag'), '--delay', '1.5', '--rate', '2'],
+        proc = subprocess.run([REPLAY, str(tmp_path / 'bag'), '--delay', '0',
+                               '--wait-for-subscribers', '1', '--rate', '2'],
                               capture_output=True, text=True, timeout=60)
         deadline = time.monotonic() + 5.0
         while time.monotonic() < deadline and any(

@@ -24,6 +24,9 @@ from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import MarkerArray
 
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+# Deep enough that a test whose executor falls behind a realtime sim on a busy machine still
+# receives every step (the sim's publishers keep 1000).
+DEEP_QOS = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
 # /rosout keeps its latest messages for late joiners (transient local): so do we.
 ROSOUT_QOS = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
@@ -36,10 +39,10 @@ class Driver(Node):
         self.odom, self.clock, self.joints, self.logs = [], [], [], []
         self.truth, self.markers = [], []
         self.new_odom = threading.Condition()
-        self.create_subscription(Odometry, 'odom', self._on_odom, QOS)
-        self.create_subscription(Clock, '/clock', self.clock.append, QOS)
-        self.create_subscription(JointState, 'joint_states', self.joints.append, QOS)
-        self.create_subscription(Odometry, 'ground_truth', self.truth.append, QOS)
+        self.create_subscription(Odometry, 'odom', self._on_odom, DEEP_QOS)
+        self.create_subscription(Clock, '/clock', self.clock.append, DEEP_QOS)
+        self.create_subscription(JointState, 'joint_states', self.joints.append, DEEP_QOS)
+        self.create_subscription(Odometry, 'ground_truth', self.truth.append, DEEP_QOS)
         self.create_subscription(MarkerArray, 'robot_markers', self.markers.append, QOS)
         self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
         self.steer = self.create_publisher(Float64MultiArray,

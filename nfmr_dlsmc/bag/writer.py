@@ -124,6 +124,9 @@ class BagWriter:
         self._writer = Writer(self._stream, chunk_size=self.chunk_size,
                               compression=CompressionType.ZSTD)
         self._writer.start(profile='ros2', library='nfmr')
+        # On disk at once: a bag whose recorder is killed before its first chunk is still an
+        # MCAP file (magic and header), read as an empty, truncated bag.
+        self._stream.flush()
 
     def __enter__(self):
         return self

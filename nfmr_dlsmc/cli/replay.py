@@ -26,6 +26,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='publish /clock from bag time (the recorded /clock is skipped)')
     parser.add_argument('--delay', type=float, default=1.0, metavar='S',
                         help='wait S seconds after creating publishers, for discovery')
+    parser.add_argument('--wait-for-subscribers', type=int, default=0, metavar='N',
+                        help='then wait until every replayed topic has N matched subscribers '
+                             '(default 0: do not wait)')
     return parser
 
 
@@ -42,6 +45,8 @@ def _run(args) -> int:
     # Plain floats, not positive_number: an infinite rate replays as fast as it can.
     if not args.rate > 0.0:
         raise UsageError(f'--rate must be > 0, got {args.rate}')
+    if args.wait_for_subscribers < 0:
+        raise UsageError(f'--wait-for-subscribers must be >= 0, got {args.wait_for_subscribers}')
     if args.start_offset < 0.0:
         raise UsageError(f'--start-offset must be >= 0, got {args.start_offset}')
     return replay(ReplayOptions(**vars(args)))

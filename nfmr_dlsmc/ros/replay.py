@@ -28,6 +28,9 @@ import yaml
 
 #: /clock from bag time at most every this much bag time [ns].
 CLOCK_PERIOD_NS = 1_000_000
+#: Longest wall time [s] the replay waits at the end for reliable subscribers to take the
+#: last messages.
+ACK_TIMEOUT = 5.0
 
 
 def _policy(enum, value, usable, default):
@@ -154,6 +157,8 @@ class ReplayOptions:
         Publish /clock from bag time (the recorded /clock is skipped).
     delay : float
         Wait after creating the publishers, for discovery [s].
+    wait_for_subscribers : int
+        Then wait until every replayed topic has this many matched subscribers.
 
     """
 
@@ -164,6 +169,7 @@ class ReplayOptions:
     start_offset: float
     clock: bool
     delay: float
+    wait_for_subscribers: int = 0
 
 
 def _wanted(args: ReplayOptions, topic: str) -> bool:
@@ -279,6 +285,24 @@ class _Replayer:
             if _wanted(self.args, topic):
                 self._publisher(topic, type_name, metadata)
 
+    def wait_for_subscribers(self, count: int) -> None:
+        """Return once every publisher has ``count`` matched subscriptions (DDS matching)."""
+        publishers = [p for p in self.publishers.values() if p is not None]
+        announced = False
+        while any(p.get_subscription_count() < count for p in publishers):
+            if not announced:
+                print(f'nfmr-replay: waiting for {count} subscriber(s) on every topic',
+                      file=sys.stderr, flush=True)
+                announced = True
+            time.sleep(0.01)
+
+    def wait_for_acks(self, timeout_s: float) -> None:
+        """Wait up to ``timeout_s`` [s] for reliable subscribers to take what was published."""
+        deadline = time.monotonic() + timeout_s
+        for pub in (p for p in self.publishers.values() if p is not None):
+            left = max(0.0, deadline - time.monotonic())
+            pub.wait_for_all_acked(Duration(seconds=left))
+
     def play_once(self, path, duration_s: float | None) -> BagContents:
         """Publish the selected messages of the bag once, at their pace; return its contents."""
         args = self.args
@@ -360,6 +384,7 @@ def replay(args: ReplayOptions) -> int:
     try:
         replayer.prepare(found.contents)
         time.sleep(args.delay)
+        replayer.wait_for_subscribers(args.wait_for_subscribers)
         duration = _bag_duration(args.bag)
         while True:
             contents = replayer.play_once(args.bag, duration)
@@ -367,7 +392,7 @@ def replay(args: ReplayOptions) -> int:
                 print(f'nfmr-replay: warning: {contents.warning()}', file=sys.stderr)
             if not args.loop:
                 break
-        time.sleep(0.5)  # let reliable subscribers take the last messages
+        replayer.wait_for_acks(ACK_TIMEOUT)  # reliable subscribers take the last messages
     except KeyboardInterrupt:
         print('\nnfmr-replay: interrupted', file=sys.stderr)
         status = 130

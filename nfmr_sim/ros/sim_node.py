@@ -14,6 +14,10 @@ and, alternatively, ``cmd_vel`` (geometry_msgs/Twist of P, mapped through the st
 geometry). Malformed, non-finite or out-of-limit commands (see :mod:`nfmr_sim.command_gate`),
 or missing ones, brake the wheels; the reason is logged once.
 
+In ``realtime`` mode the steps follow the wall clock (:class:`~nfmr_sim.realtime_pacer.
+RealtimePacer`): a delay up to ``realtime_max_lag`` is caught up, a longer one slows the run
+down; no step is ever skipped, and how far the sim fell behind is logged.
+
 Services, in both modes: ``~/reset`` (std_srvs/Trigger) puts P back at ``initial_pose`` at
 rest, wheels straight, and forgets the commands received, so that the wheels brake until the
 next one; the simulated time runs on (a /clock going back would break every node on sim
@@ -42,6 +46,7 @@ from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
 from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
+from nfmr_sim.realtime_pacer import RealtimePacer
 from nfmr_sim.ros.messages import odometry_covariance, odometry_message, time_message
 from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
@@ -58,6 +63,8 @@ from visualization_msgs.msg import MarkerArray
 GATE_POLL = 0.01
 #: Wall time [s] between two looks at whether the node stops while the sim is paused.
 PAUSE_POLL = 0.05
+#: Least wall time [s] between two log lines saying the realtime sim fell behind.
+SLIP_LOG_PERIOD = 10.0
 
 
 class SimNode(SchemaNode):
@@ -85,13 +92,17 @@ class SimNode(SchemaNode):
         self._marker_pub = self.create_publisher(
             MarkerArray, 'robot_markers',
             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        # Lockstep takes every command (one per step); realtime only the latest, so that a
+        # flood of commands is dropped by DDS instead of costing the step thread its time.
+        commands = reliable if self.settings.mode == 'lockstep' else QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE)
         self.create_subscription(Float64MultiArray, STEER_TOPIC,
                                  lambda m: self.gate.offer_steer(m.data, self.world.time),
-                                 reliable)
+                                 commands)
         self.create_subscription(Float64MultiArray, WHEEL_TOPIC,
                                  lambda m: self.gate.offer_wheels(m.data, self.world.time),
-                                 reliable)
-        self.create_subscription(Twist, TWIST_TOPIC, self._on_twist, reliable)
+                                 commands)
+        self.create_subscription(Twist, TWIST_TOPIC, self._on_twist, commands)
         self._pending = None  # settings of an accepted live change, for the next step
         self._pending_lock = threading.Lock()
         # Held by the step thread while it changes the world or the gate (a live change, a
@@ -104,6 +115,8 @@ class SimNode(SchemaNode):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stepper = LoopThread(self._loop, 'step', node=self)
         self.steps = 0
+        self.behind_s, self.slips = 0.0, 0  # realtime: wall time given up, slips (pacer)
+        self._slips_logged, self._slip_logged_at = 0, -SLIP_LOG_PERIOD
         self.failure = None  # what ended stepping, set by the step thread (LoopThread)
 
     def _on_twist(self, msg: Twist) -> None:
@@ -208,37 +221,51 @@ class SimNode(SchemaNode):
 
     def _loop(self) -> None:
         s = self.settings
-        dt = s.world.physics_dt
         if s.start_after_subscribers:
             self.get_logger().info(f'waiting for {s.start_after_subscribers} odom subscribers')
+            # Matched by the publisher itself, not only seen in the graph: the first message
+            # then reaches them.
             while self._stepper.running.is_set() and (
-                    self.count_subscribers('odom') < s.start_after_subscribers):
+                    self._odom_pub.get_subscription_count() < s.start_after_subscribers):
                 time.sleep(0.01)
-            time.sleep(0.2)  # let the matched readers settle before the first message
         with self._control:
             self._hold_while_paused()
             self._publish(self.world.observe(), aux=True)
-        start = time.monotonic()
+        pacer = RealtimePacer(s.world.physics_dt, s.realtime_max_lag, time.monotonic())
         while self._stepper.running.is_set():
             with self._control:
                 self._apply_pending()
             s = self.settings
-            if s.max_time and self.world.time >= s.max_time - 0.5 * dt:
+            if s.max_time and self.world.time >= s.max_time - 0.5 * s.world.physics_dt:
                 self.get_logger().info(f'reached max_time {s.max_time:g} s: stepping stopped')
                 return  # the node stays up, so everything published so far is delivered
             if s.mode == 'lockstep':
                 self._wait_for_step_command(s.lockstep_timeout)
             else:
-                delay = start + (self.steps + 1) * dt - time.monotonic()
+                pacer.max_lag = s.realtime_max_lag
+                delay = pacer.delay(time.monotonic())
                 if delay > 0.0:
                     time.sleep(delay)
+                self._note_slip(pacer)
             with self._control:
                 if self._paused:
                     self._hold_while_paused()
-                    start = time.monotonic() - self.steps * dt  # realtime: no catching up
+                    pacer.resume(time.monotonic())  # no catching up on the time paused
                     continue
                 if not self._step():
                     return
+            pacer.stepped()
+
+    def _note_slip(self, pacer: RealtimePacer) -> None:
+        """Realtime: log, at most every 10 s of wall time, how far the sim fell behind."""
+        self.behind_s, self.slips = pacer.behind_s, pacer.slips
+        now = time.monotonic()
+        if pacer.slips > self._slips_logged and now - self._slip_logged_at >= SLIP_LOG_PERIOD:
+            self.get_logger().warning(
+                f'slower than real time: {pacer.behind_s:.3f} s behind the wall clock at '
+                f'{self.world.time:.3f} s of simulated time ({pacer.slips} slips beyond '
+                f'realtime_max_lag {pacer.max_lag:g} s); no step is skipped')
+            self._slips_logged, self._slip_logged_at = pacer.slips, now
 
     def _wait_for_step_command(self, timeout: float) -> None:
         """Lockstep: wait up to ``timeout`` wall seconds for a command on the gate in force."""
