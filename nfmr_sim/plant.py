@@ -14,12 +14,13 @@ import math
 import time
 
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import check_start, sample_reference, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
 from nfmr_sim.sim_params import sim_settings
-from nfmr_sim.world import ChassisWorld
+from nfmr_sim.world import ChassisWorld, OdometrySample
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
 
@@ -28,13 +29,16 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
                       world_config: WorldConfig | None = None,
                       geometry: RobotGeometry | None = None, steering: SteerMode | None = None,
                       disturbance: YawRateDisturbance | None = None,
-                      progress=None) -> SimResult:
+                      progress=None, estimator: EstimatorConfig | None = None) -> SimResult:
     """
     Run ``controller`` against the pybullet chassis from pose ``x0`` of P.
 
     Per physics step k (t_k = k dt, dt = ``world_config.physics_dt``, which must equal the
-    controller's period): the controller sees the odometry of P and the reference at t_k
-    and returns (v, omega); the yaw-rate disturbance varpi(t_k) is added to omega on the
+    controller's period): the controller sees the pose of P and the reference at t_k and
+    returns (v, omega). The pose is the latest odometry message (the world's odometry model:
+    rate, latency, noise, bias), or with ``estimator`` enabled its estimate at t_k
+    (:class:`~nfmr_dlsmc.core.pose_estimator.PoseEstimator`, fed each message as it arrives
+    and the commands); the yaw-rate disturbance varpi(t_k) is added to omega on the
     actuator side; (v, omega + varpi) is mapped to the wheels with (j1, j2), the steer
     angles of wheels that stand still held; the world steps once.
 
@@ -59,6 +63,8 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
         Yaw-rate pulses added to the commanded omega before the mapping.
     progress : callable, optional
         Called as ``progress(t)`` about once per simulated second.
+    estimator : EstimatorConfig, optional
+        The pose estimator between odometry and the law (off by default).
 
     Returns
     -------
@@ -97,11 +103,29 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
     with ChassisWorld(world_config) as world:
         world.reset(x0)
         out = world.observe()
+        # Before the first message (odometry with latency), the pose P starts from.
+        odom = world.first_odometry() or OdometrySample(0.0, out.point_p)
+        estimate = PoseEstimator(estimator) if estimator and estimator.enabled else None
+        # What an odometry message's covariance says: the noise of the world's odometry.
+        noise = world_config.disturbance
+        sigma = (noise.odom_position_noise, noise.odom_yaw_noise)
+        if estimate is not None:
+            estimate.measure(odom.time, odom.state.x, odom.state.y, odom.state.yaw, sigma)
         for k, ((x_d, y_d, xdot_d, ydot_d), (xddot_d, yddot_d), varpi) in enumerate(
                 zip(ref.tolist(), acc.tolist(), dist.tolist())):
-            odom, truth = out.odometry, out.point_p
-            v, w = step(odom.x, odom.y, odom.yaw, x_d, y_d, xdot_d, ydot_d, None,
-                        xddot_d, yddot_d)
+            truth = out.point_p
+            if out.odometry is not None:
+                odom = out.odometry
+                if estimate is not None and k:
+                    estimate.measure(odom.time, odom.state.x, odom.state.y, odom.state.yaw,
+                                     sigma)
+            if estimate is None:
+                x, y, yaw = odom.state.x, odom.state.y, odom.state.yaw
+            else:
+                x, y, yaw = estimate.pose(t[k])
+            v, w = step(x, y, yaw, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
+            if estimate is not None:
+                estimate.command(v, w)
             rows.append((truth.x, truth.y, truth.yaw, v, w) + telemetry())
             cmd = wheel_commands(v, w + varpi, geometry, steering, hold_steer=hold)
             hold = cmd.steer

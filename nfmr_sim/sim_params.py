@@ -28,7 +28,9 @@ from nfmr_dlsmc.core.schema import (
     POSITIVE,
     vector,
 )
+from nfmr_dlsmc.core.sensing import SENSING_KEYS, SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import SteerMode
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_sim.urdf import ChassisConfig
 from nfmr_sim.world_config import (
     DisturbanceConfig,
@@ -50,6 +52,10 @@ class SimSettings:
                       'lockstep_timeout); realtime: steps follow the wall clock, never '
                       'faster; a machine that cannot keep up slows the run down, no step is '
                       'skipped', one_of('lockstep', 'realtime'), read_only=True)
+    sensing: str = param('', '', 'a sensing preset (ideal, good, harsh) that sets the '
+                         "odometry's rate, latency, noise and bias walk "
+                         "(disturbance.odom_*: set one or the other); '': those "
+                         'parameters as given', one_of('', *SENSING_PRESETS), read_only=True)
     realtime_max_lag: float = param(0.02, 's', 'realtime: the sim catches up a delay up to '
                                     'this long by stepping without sleeping; beyond it the '
                                     'run continues slower than real time (counted and '
@@ -86,6 +92,22 @@ class SimSettings:
         return max(1, round(steps)) if math.isfinite(steps) else 0
 
 
+def _expand_sensing(flat: dict) -> dict:
+    """Return ``flat`` with a ``sensing`` preset's odometry values in place."""
+    preset = flat.get('sensing') or ''
+    if not preset:
+        return flat
+    if preset not in SENSING_PRESETS:
+        from_flat(SimSettings, {'sensing': preset})  # the schema's error, naming the rule
+    default = sim_parameter_defaults()
+    for key in SENSING_KEYS:
+        if key in flat and flat[key] != default[key]:
+            raise ParameterError(key, flat[key], f'conflicts with sensing = {preset!r}: set '
+                                 'the preset or the odometry parameters, not both',
+                                 SENSING_KEYS[key])
+    return {**with_sensing(flat, preset), 'sensing': preset}
+
+
 def sim_parameters() -> list[Param]:
     """Return every parameter of the sim node, in declaration order."""
     return [*params_of(SimSettings), *params_of(WorldConfig), *params_of(SteerMode),
@@ -109,6 +131,7 @@ def sim_settings(flat: dict) -> SimSettings:
 
     """
     check_known(flat, sim_parameters())
+    flat = _expand_sensing(flat)
     world = from_flat(WorldConfig, flat, chassis=from_flat(ChassisConfig, flat),
                       motors=from_flat(MotorConfig, flat),
                       friction=from_flat(FrictionConfig, flat),

@@ -1,7 +1,7 @@
 """The pybullet world of the 4WIS chassis (no ROS): build, command, step, observe."""
 
 import collections
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from pathlib import Path
 import tempfile
@@ -42,6 +42,24 @@ class PlanarState:
 
 
 @dataclass(frozen=True)
+class OdometrySample:
+    """
+    One odometry message of P: the pose measured at ``time``, delivered later.
+
+    Attributes
+    ----------
+    time : float
+        When the pose was true [s] (the message stamp).
+    state : PlanarState
+        P as measured: noise and bias on x, y, yaw; the twist exact.
+
+    """
+
+    time: float
+    state: PlanarState
+
+
+@dataclass(frozen=True)
 class StepOutput:
     """
     What one physics step produced.
@@ -52,8 +70,9 @@ class StepOutput:
         Simulated time after the step [s].
     point_p, centre : PlanarState
         Ground truth of the tracked point P and of the geometric centre.
-    odometry : PlanarState
-        P as the odometry reports it (noise and latency applied).
+    odometry : OdometrySample or None
+        The odometry message that arrives at this step (measured ``odom_latency`` earlier),
+        or None when none does (between two messages of a slower odometry).
     joint_position, joint_velocity, joint_torque : ndarray (8,)
         Steer joints FL FR RL RR, then drive joints FL FR RL RR [rad, rad/s, Nm].
     wheel_normal_force : ndarray (4,)
@@ -68,7 +87,7 @@ class StepOutput:
     time: float
     point_p: PlanarState
     centre: PlanarState
-    odometry: PlanarState
+    odometry: OdometrySample | None
     joint_position: np.ndarray
     joint_velocity: np.ndarray
     joint_torque: np.ndarray
@@ -134,8 +153,9 @@ class ChassisWorld:
         """
         Place P at ``pose`` (x [m], y [m], yaw [rad]) at rest, wheels straight.
 
-        The held commands, the odometry's latency buffer and its noise generator start over;
-        the time goes back to 0 unless ``keep_time``, which lets it run on.
+        The held commands, the odometry (its messages in flight, its bias) and its noise
+        generator start over, and P is measured at once; the time goes back to 0 unless
+        ``keep_time``, which lets it run on.
         """
         c, cfg = self._client, self.config
         x, y, yaw = (float(v) for v in pose)
@@ -154,8 +174,10 @@ class ChassisWorld:
         self._steer_applied = np.zeros(4)
         self._wheel_target = np.zeros(4)
         self._rng = np.random.default_rng(cfg.disturbance.seed)
-        self._odom_buffer = collections.deque(maxlen=cfg.disturbance.odom_latency_steps + 1)
+        self._odom_in_flight = collections.deque()  # OdometrySample, oldest first
+        self._odom_bias = np.zeros(3)  # x [m], y [m], yaw [rad]
         self._apply_motors()
+        self._measure_odometry(self._planar(cfg.tracked_point_offset)[0])
 
     def close(self) -> None:
         """Disconnect the pybullet client (idempotent)."""
@@ -222,7 +244,11 @@ class ChassisWorld:
         c.stepSimulation()
         self._time = (self._steps + 1) * cfg.physics_dt
         self._steps += 1
-        return self.observe(active)
+        out = self.observe(active)
+        self._drift_odometry_bias()
+        if self._steps % cfg.odom_period_steps == 0:
+            self._measure_odometry(out.point_p)
+        return replace(out, odometry=self._arriving_odometry())
 
     def _apply_motors(self) -> None:
         c, m = self._client, self.config.motors
@@ -280,7 +306,11 @@ class ChassisWorld:
         return p, centre
 
     def observe(self, active: tuple = ()) -> StepOutput:
-        """Return the current state as a :class:`StepOutput` (``step`` returns it too)."""
+        """
+        Return the current state as a :class:`StepOutput`; a pure read.
+
+        Its ``odometry`` is None: odometry messages arrive with :meth:`step`.
+        """
         c, cfg = self._client, self.config
         point_p, centre = self._planar(cfg.tracked_point_offset)
         states = c.getJointStates(self._robot, self._joints)
@@ -294,17 +324,42 @@ class ChassisWorld:
                 normal[self._drive.index(link)] += contact[9]
         limit = cfg.motors.drive_torque_limit
         saturated = bool(np.any(np.abs(torque[4:]) >= 0.999 * limit))
-        return StepOutput(self._time, point_p, centre, self._odometry(point_p), position,
-                          velocity, torque, normal, active, saturated)
+        return StepOutput(self._time, point_p, centre, None, position, velocity, torque,
+                          normal, active, saturated)
 
-    def _odometry(self, truth: PlanarState) -> PlanarState:
+    def first_odometry(self) -> OdometrySample | None:
+        """Return the odometry message due at once after a reset (None with latency)."""
+        return self._arriving_odometry()
+
+    # -- odometry --------------------------------------------------------------------------
+
+    def _drift_odometry_bias(self) -> None:
+        """Advance the bias random walk by one physics step."""
+        d, dt = self.config.disturbance, self.config.physics_dt
+        if d.odom_position_bias_walk > 0.0:
+            self._odom_bias[:2] += self._rng.normal(0.0, d.odom_position_bias_walk
+                                                    * math.sqrt(dt), 2)
+        if d.odom_yaw_bias_walk > 0.0:
+            self._odom_bias[2] += self._rng.normal(0.0, d.odom_yaw_bias_walk * math.sqrt(dt))
+
+    def _measure_odometry(self, truth: PlanarState) -> None:
+        """Measure P now: noise and bias on the pose; in flight until its latency passed."""
         d = self.config.disturbance
-        if d.odom_position_noise > 0.0 or d.odom_yaw_noise > 0.0:
-            nx, ny = (self._rng.normal(0.0, d.odom_position_noise, 2)
-                      if d.odom_position_noise else (0.0, 0.0))
-            nyaw = self._rng.normal(0.0, d.odom_yaw_noise) if d.odom_yaw_noise else 0.0
-            truth = PlanarState(truth.x + nx, truth.y + ny,
-                                math.remainder(truth.yaw + nyaw, 2 * math.pi),
-                                truth.vx, truth.vy, truth.yaw_rate)
-        self._odom_buffer.append(truth)
-        return self._odom_buffer[0]
+        bx, by, byaw = self._odom_bias.tolist()
+        nx, ny = (self._rng.normal(0.0, d.odom_position_noise, 2).tolist()
+                  if d.odom_position_noise else (0.0, 0.0))
+        nyaw = float(self._rng.normal(0.0, d.odom_yaw_noise)) if d.odom_yaw_noise else 0.0
+        measured = truth
+        if bx or by or byaw or nx or ny or nyaw:
+            measured = PlanarState(truth.x + bx + nx, truth.y + by + ny,
+                                   math.remainder(truth.yaw + byaw + nyaw, 2 * math.pi),
+                                   truth.vx, truth.vy, truth.yaw_rate)
+        self._odom_in_flight.append((self._steps + self.config.odom_latency_steps,
+                                     OdometrySample(self._time, measured)))
+
+    def _arriving_odometry(self) -> OdometrySample | None:
+        """Return the latest message whose latency has passed at this step, if any."""
+        arrived = None
+        while self._odom_in_flight and self._odom_in_flight[0][0] <= self._steps:
+            arrived = self._odom_in_flight.popleft()[1]
+        return arrived

@@ -145,7 +145,13 @@ class ForcePulse:
 @documented
 @dataclass(frozen=True)
 class DisturbanceConfig:
-    """The disturbance schedule, seeded so that a run is reproducible."""
+    """
+    The disturbance schedule and the odometry as a robot has it, seeded to be reproducible.
+
+    Odometry is measured every ``odom_period_steps`` physics steps (``odom_rate``), with
+    white noise and a bias that drifts as a random walk, and delivered ``odom_latency``
+    later, stamped with the time it was measured.
+    """
 
     prefix: ClassVar[str] = 'disturbance'
 
@@ -155,12 +161,22 @@ class DisturbanceConfig:
                                     'x (e.g. a slope)', FINITE)
     constant_force_y: float = param(0.0, 'N', 'persistent world-frame force on the chassis, '
                                     'y', FINITE)
+    odom_rate: float = param(1000.0, 'Hz', 'odometry messages per second of simulated time, '
+                             'rounded to whole physics steps (the physics keeps stepping at '
+                             '1 / physics_dt)', POSITIVE, read_only=True)
+    odom_latency: float = param(0.0, 's', 'odometry arrives this long after the instant its '
+                                'pose was true (its stamp); rounded to whole physics steps',
+                                NON_NEGATIVE, read_only=True)
     odom_position_noise: float = param(0.0, 'm', 'standard deviation of Gaussian noise on '
                                        'the odometry position', NON_NEGATIVE)
     odom_yaw_noise: float = param(0.0, 'rad', 'standard deviation of Gaussian noise on the '
                                   'odometry yaw', NON_NEGATIVE)
-    odom_latency_steps: int = param(0, '', 'odometry is this many physics steps old',
-                                    at_least(0), read_only=True)
+    odom_position_bias_walk: float = param(0.0, 'm/sqrt(s)', 'random walk of a bias on the '
+                                           'odometry position (x and y each): its standard '
+                                           'deviation grows as this times sqrt(t)',
+                                           NON_NEGATIVE, read_only=True)
+    odom_yaw_bias_walk: float = param(0.0, 'rad/sqrt(s)', 'random walk of a bias on the '
+                                      'odometry yaw', NON_NEGATIVE, read_only=True)
     seed: int = param(0, '', 'seed of the odometry noise generator', at_least(0),
                       read_only=True)
 
@@ -190,6 +206,20 @@ class WorldConfig:
 
     def __post_init__(self):
         check_fields(self)
+        rate = self.disturbance.odom_rate
+        if rate * self.physics_dt > 1.0 + 1e-9:
+            raise ParameterError('disturbance.odom_rate', rate, 'must not exceed the physics '
+                                 f'rate 1 / physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
+
+    @property
+    def odom_period_steps(self) -> int:
+        """Physics steps between two odometry measurements (at least 1)."""
+        return max(1, round(1.0 / (self.disturbance.odom_rate * self.physics_dt)))
+
+    @property
+    def odom_latency_steps(self) -> int:
+        """Physics steps from a measurement to its message."""
+        return round(self.disturbance.odom_latency / self.physics_dt)
 
     @property
     def tracked_point_offset(self) -> float:

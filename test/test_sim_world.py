@@ -121,17 +121,48 @@ def test_same_seed_gives_identical_runs_and_noise_is_seeded():
     assert [o.odometry for o in a] == [o.odometry for o in b]
     assert [o.odometry for o in a] != [o.odometry for o in c]
     assert noisy.seed == 7
-    errors = np.array([[o.odometry.x - o.point_p.x, o.odometry.yaw - o.point_p.yaw] for o in a])
+    errors = np.array([[o.odometry.state.x - o.point_p.x, o.odometry.state.yaw - o.point_p.yaw]
+                       for o in a])
     assert np.std(errors[:, 0]) == pytest.approx(0.01, rel=0.15)
     assert np.std(errors[:, 1]) == pytest.approx(0.01, rel=0.15)
 
 
-def test_odometry_latency_delays_by_whole_steps():
-    cfg = WorldConfig(disturbance=DisturbanceConfig(odom_latency_steps=20))
+def test_default_odometry_is_the_truth_of_every_step():
+    with ChassisWorld() as world:
+        out = run(world, 1.0, 0.3, SteerMode(), 0.5)
+    assert all(o.odometry.time == o.time and o.odometry.state == o.point_p for o in out)
+
+
+def test_odometry_comes_at_its_rate_late_by_its_latency_stamped_when_measured():
+    cfg = WorldConfig(disturbance=DisturbanceConfig(odom_rate=50.0, odom_latency=0.04))
     with ChassisWorld(cfg) as world:
-        out = run(world, 1.0, 0.0, SteerMode(), 1.0)
-        for k in range(20, len(out)):
-            assert out[k].odometry == out[k - 20].point_p
+        first = world.first_odometry()
+        out = run(world, 1.0, 0.3, SteerMode(), 1.0)
+    assert first is None  # the measurement at t = 0 is still in flight
+    truth = {round(o.time * 1000): o.point_p for o in out}
+    arrivals = [(o.time, o.odometry) for o in out if o.odometry is not None]
+    # Measured every 20 steps from t = 0, each delivered 40 ms later, in order.
+    assert [round(t * 1000) for t, _ in arrivals] == list(range(40, 1001, 20))
+    for arrived, sample in arrivals:
+        assert arrived - sample.time == pytest.approx(0.04, abs=1e-9)
+        if sample.time > 0.0:
+            assert sample.state == truth[round(sample.time * 1000)]  # the pose at its stamp
+
+
+def test_a_drifting_bias_grows_as_a_random_walk_and_the_truth_stays_exact():
+    walk, seconds = 0.01, 2.0  # [m/sqrt(s)], [s]
+    final = []
+    for seed in range(12):
+        cfg = WorldConfig(disturbance=DisturbanceConfig(
+            odom_position_bias_walk=walk, odom_yaw_bias_walk=walk, seed=seed))
+        with ChassisWorld(cfg) as world:
+            out = run(world, 0.5, 0.0, SteerMode(), seconds)
+        errors = np.array([[o.odometry.state.x - o.point_p.x, o.odometry.state.y - o.point_p.y,
+                            o.odometry.state.yaw - o.point_p.yaw] for o in out])
+        assert np.all(np.abs(np.diff(errors, axis=0)) < 10 * walk * math.sqrt(0.001))  # drift
+        final.append(errors[-1])
+    # Across seeds the bias after 2 s has a standard deviation of walk * sqrt(2 s).
+    assert np.std(final) == pytest.approx(walk * math.sqrt(seconds), rel=0.35)
 
 
 def test_reset_places_p_at_the_requested_pose():
@@ -206,7 +237,10 @@ def test_brake_stops_the_wheels_and_holds_steering():
     (lambda: MotorConfig(drive_gear_ratio=0.0), 'motors.drive_gear_ratio'),
     (lambda: FrictionConfig(lateral=-1.0), 'friction.lateral'),
     (lambda: FrictionPatch(1.0, 0.0, 0.0, 1.0), 'friction.patch.x_max'),
-    (lambda: DisturbanceConfig(odom_latency_steps=-1), 'disturbance.odom_latency_steps'),
+    (lambda: DisturbanceConfig(odom_latency=-0.01), 'disturbance.odom_latency'),
+    (lambda: DisturbanceConfig(odom_rate=0.0), 'disturbance.odom_rate'),
+    (lambda: WorldConfig(disturbance=DisturbanceConfig(odom_rate=2000.0)),
+     'disturbance.odom_rate'),
     (lambda: WorldConfig(physics_dt=0.1), 'physics_dt'),
 ])
 def test_invalid_world_parameters_are_named(factory, name):

@@ -15,6 +15,7 @@ from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.metrics import format_metric, HOLD_ROWS, simulation_metrics
 from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import (
@@ -80,7 +81,8 @@ class Evaluation:
 
 def load_evaluation(plant: str, controller_name: str, x0, duration: float, disturbance: str,
                     params_file=None, gains_file=None, dt: float | None = None,
-                    trajectory_name: str | None = None) -> Evaluation:
+                    trajectory_name: str | None = None,
+                    sensing: str | None = None) -> Evaluation:
     """
     Load and check one scenario; nothing is simulated yet.
 
@@ -98,6 +100,8 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float, distu
         Control period [s] instead of the file's ``1/control_rate``.
     trajectory_name : str, optional
         A reference with its default parameters instead of the file's trajectory.
+    sensing : str, optional
+        A sensing preset instead of the file's odometry (pybullet only).
 
     Raises
     ------
@@ -119,7 +123,11 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float, distu
         blocks = load_gain_blocks(gains_file or shipped_config('comparison.yaml'))
         controller = build_controller(controller_name, blocks.get(controller_name),
                                       params.dlsmc.limits, params.dlsmc.dt)
-    world = pybullet_world(params_file, params.dlsmc.dt) if plant == 'pybullet' else None
+    if sensing is not None and plant != 'pybullet':
+        raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
+                             'kinematic model has no odometry')
+    world = (pybullet_world(params_file, params.dlsmc.dt, sensing) if plant == 'pybullet'
+             else None)
     return Evaluation(plant, controller_name, controller, params, trajectory, world,
                       tuple(x0), duration, disturbance)
 
@@ -138,7 +146,8 @@ def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,
     controller, params, trajectory, x0, duration
         As in :class:`Evaluation`.
     world : object, optional
-        The pybullet world configuration (pybullet only).
+        The pybullet world configuration (pybullet only), its odometry included; the
+        pose the controller sees goes through ``params.estimator`` when it is enabled.
     disturbance : YawRateDisturbance, optional
         Added to the commanded yaw rate.
     progress : callable, optional
@@ -152,7 +161,7 @@ def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,
     if plant == 'pybullet':
         return robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
                                                 params.geometry, params.steering,
-                                                disturbance, progress)
+                                                disturbance, progress, params.estimator)
     run = simulate(controller, trajectory, x0, duration, params.dlsmc.dt, disturbance)
     return with_steer_angles(run, params.geometry, params.steering)
 

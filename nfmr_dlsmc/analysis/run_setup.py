@@ -7,13 +7,14 @@ start.
 
 import math
 
+from nfmr_dlsmc.core.sensing import with_sensing
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import load_params_file
 import numpy as np
 
 
-def pybullet_world(params_file, dt: float):
+def pybullet_world(params_file, dt: float, sensing: str | None = None):
     """
     Return the pybullet chassis's world configuration for a controller of period ``dt``.
 
@@ -24,6 +25,9 @@ def pybullet_world(params_file, dt: float):
     dt : float
         The controller's period [s]; the plant steps the controller once per physics
         step, so the world's ``physics_dt`` must equal it.
+    sensing : str, optional
+        A sensing preset (:data:`~nfmr_dlsmc.core.sensing.SENSING_PRESETS`) replacing the
+        file's odometry (``--sensing``).
 
     Returns
     -------
@@ -39,6 +43,8 @@ def pybullet_world(params_file, dt: float):
 
     """
     flat = load_params_file(params_file, 'sim') if params_file else {}
+    if sensing is not None:
+        flat = with_sensing(flat, sensing)
     world = robot_plant('pybullet').settings(flat).world
     if world.physics_dt != dt:
         raise ParameterError('physics_dt', world.physics_dt,

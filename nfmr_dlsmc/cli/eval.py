@@ -23,6 +23,7 @@ from nfmr_dlsmc.cli.common import (
     UsageError,
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
 
 
@@ -63,6 +64,11 @@ def _parser() -> argparse.ArgumentParser:
                              f'(default {HOLD_FROM:g})')
     parser.add_argument('--params', metavar='FILE.yaml',
                         help="controller parameter file (ROS 2 layout, node 'controller')")
+    parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
+                        help="pybullet: the robot's odometry from a preset instead of the "
+                             "file's sim section: ideal (every 1 ms, exact), good (100 Hz, "
+                             '10 ms late, 1 mm / 1 mrad noise), harsh (50 Hz, 40 ms, 3 mm / '
+                             '3 mrad, drifting bias); metrics are of the ground truth')
     parser.add_argument('--json', action='store_true',
                         help='print the metrics as one JSON object on the last line')
     return parser
@@ -79,7 +85,7 @@ def _run(args) -> int:
                          'gains come from --params')
     evaluation = load_evaluation(args.plant, args.controller, args.x0, args.duration,
                                  args.disturbance, args.params, args.gains, args.dt,
-                                 args.trajectory)
+                                 args.trajectory, args.sensing)
     _check_length(args.duration, evaluation.params.dlsmc.dt)
     show = args.plant == 'pybullet' and sys.stderr.isatty()
 

@@ -357,13 +357,15 @@ def within(low: float, high: float, why: str = '') -> Rule:
 
 
 def one_of(*choices: str) -> Rule:
-    """Return the rule: one of ``choices``."""
+    """Return the rule: one of ``choices`` (an empty one is shown as '')."""
+    shown = [c or "''" for c in choices]
+
     def check(name, value, unit):
         if not isinstance(value, str) or value not in choices:
-            raise ParameterError(name, value, f"must be one of {', '.join(choices)}", unit)
+            raise ParameterError(name, value, f"must be one of {', '.join(shown)}", unit)
         return value
 
-    return Rule(' | '.join(choices), check)
+    return Rule(' | '.join(shown), check)
 
 
 def at_least(lowest: int) -> Rule:

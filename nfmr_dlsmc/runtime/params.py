@@ -14,6 +14,7 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
   (``trajectory.sine.speed``, ``trajectory.circle.radius``, ...); the named one is used;
 - ``steering.*`` (:class:`~nfmr_dlsmc.core.steering.SteerMode`) and ``geometry.*``
   (:class:`~nfmr_dlsmc.core.steering.RobotGeometry`);
+- ``estimator.*`` (:class:`~nfmr_dlsmc.core.pose_estimator.EstimatorConfig`);
 - the node's own options (:class:`NodeOptions`).
 
 Unknown names are errors, so a typo never silently leaves a default in place.
@@ -25,6 +26,7 @@ from pathlib import Path
 from nfmr_dlsmc.baselines.registry import gain_sections
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.schema import (
     check_fields,
     check_known,
@@ -71,6 +73,7 @@ class ControllerParams:
     trajectory_name: str = _TRAJECTORY_NAME.default
     steering: SteerMode = field(default_factory=SteerMode)
     geometry: RobotGeometry = field(default_factory=RobotGeometry)
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
 
 
 @documented
@@ -206,7 +209,7 @@ def controller_parameters() -> list[Param]:
     law = [p for p in params_of(DlsmcConfig) if p.name != 'dt']  # as control_rate
     return [_CONTROL_RATE, *law, *params_of(OuterLoopGains), *params_of(InnerLoopGains),
             *params_of(InputLimits), *params_of(RobotGeometry), *_trajectory_parameters(),
-            *params_of(SteerMode), *params_of(NodeOptions)]
+            *params_of(SteerMode), *params_of(EstimatorConfig), *params_of(NodeOptions)]
 
 
 def controller_parameter_defaults() -> dict:
@@ -255,4 +258,5 @@ def controller_params(flat: dict) -> ControllerParams:
                             trajectory=reference,
                             trajectory_name=trajectory_name,
                             steering=mode,
-                            geometry=from_flat(RobotGeometry, flat))
+                            geometry=from_flat(RobotGeometry, flat),
+                            estimator=from_flat(EstimatorConfig, flat))

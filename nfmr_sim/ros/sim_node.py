@@ -1,9 +1,11 @@
 """
 ROS 2 node ``sim``: the pybullet chassis world behind topics.
 
-Publishes ``/clock`` and ``odom`` (pose and twist of P, ``odom`` -> ``base_link``) every
-physics step; ``joint_states``, ``ground_truth`` (true odometry of P) and
-``disturbance_active`` every ``aux_publish_every`` steps; ``robot_markers`` (the chassis, the
+Publishes ``/clock`` every physics step and ``odom`` (pose and twist of P, ``odom`` ->
+``base_link``) as the odometry model of the world delivers it: at ``disturbance.odom_rate``,
+``disturbance.odom_latency`` after the instant it was measured, which is its stamp;
+``joint_states``, ``ground_truth`` (true odometry of P) and ``disturbance_active`` every
+``aux_publish_every`` steps; ``robot_markers`` (the chassis, the
 wheels at their measured steer angles and P, at the true pose:
 :func:`~nfmr_dlsmc.ros.scene.robot_markers`) ``marker_rate`` times per simulated second. The
 pose covariance of ``odom`` holds the variances of the configured odometry noise
@@ -34,6 +36,7 @@ The others are read-only (the world is built from them); setting one is refused 
 node shuts down and ``sim`` exits with code 1 naming the error.
 """
 
+from dataclasses import replace
 import sys
 import threading
 import time
@@ -230,7 +233,8 @@ class SimNode(SchemaNode):
                 time.sleep(0.01)
         with self._control:
             self._hold_while_paused()
-            self._publish(self.world.observe(), aux=True)
+            self._publish(replace(self.world.observe(), odometry=self.world.first_odometry()),
+                          aux=True)
         pacer = RealtimePacer(s.world.physics_dt, s.realtime_max_lag, time.monotonic())
         while self._stepper.running.is_set():
             with self._control:
@@ -304,7 +308,9 @@ class SimNode(SchemaNode):
     def _publish(self, out, aux: bool) -> None:
         stamp = time_message(out.time)
         self._clock_pub.publish(Clock(clock=stamp))
-        self._odom_pub.publish(odometry_message(out.odometry, stamp, self._odom_covariance))
+        if out.odometry is not None:  # stamped when it was measured, latency ago
+            self._odom_pub.publish(odometry_message(
+                out.odometry.state, time_message(out.odometry.time), self._odom_covariance))
         every = self.settings.marker_every
         if every and self.steps % every == 0:
             p, chassis = out.point_p, self.world.config.chassis

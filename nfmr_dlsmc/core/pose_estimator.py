@@ -1,0 +1,237 @@
+"""
+The pose of P at the control tick from late, slow and noisy odometry (doc/design.md, D11).
+
+An extended Kalman filter on the unicycle model of eq. (3), with the commanded (v, omega) as
+its input. Between odometry messages it predicts the pose at each control tick from the
+commands of the ticks since; a message is fused at its stamp — the instant its pose was
+true — and the ticks after it are predicted again from there, so latency is compensated,
+not only tolerated. Messages older than the last one (out of order) are fused at their
+stamp too; messages older than the kept history are counted and dropped.
+
+Plain numpy, no filter library: a 3-state EKF with an identity measurement is a dozen
+lines, and the delayed-measurement replay below needs the filter's state at every tick,
+which filter libraries do not keep for us.
+"""
+
+from bisect import bisect_left, bisect_right
+from dataclasses import dataclass
+import math
+from typing import ClassVar
+
+from nfmr_dlsmc.core.schema import check_fields, documented, FLAG, param, POSITIVE
+import numpy as np
+
+__all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR']
+
+#: Least standard deviation [m, rad] a message's covariance is taken to say: exact odometry
+#: (a zero covariance) is trusted to a micrometre and a microradian.
+SIGMA_FLOOR = 1e-6
+
+
+@documented
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """
+    The pose estimator between odometry and the control law; off: the latest odometry.
+
+    ``position_noise`` / ``yaw_noise`` are what the filter assumes of odometry messages that
+    do not say (a message's own covariance, where it has one, is used instead);
+    ``position_walk`` / ``yaw_walk`` how far the robot's
+    motion strays from the commanded (v, omega): the larger they are against the odometry
+    noise, the faster the estimate follows the odometry and the less it smooths it.
+    """
+
+    prefix: ClassVar[str] = 'estimator'
+
+    enabled: bool = param(False, '', 'estimate the pose of P at each tick (an EKF on the '
+                          'unicycle model, fed the commanded v and omega; doc/design.md, '
+                          'D11) instead of taking the latest odometry as it is', FLAG)
+    position_noise: float = param(0.001, 'm', 'standard deviation of the odometry position '
+                                  'the filter assumes', POSITIVE)
+    yaw_noise: float = param(0.001, 'rad', 'standard deviation of the odometry yaw the '
+                             'filter assumes', POSITIVE)
+    position_walk: float = param(0.01, 'm/sqrt(s)', 'random walk of the position (in any '
+                                 'direction: the chassis slips too) against the commanded '
+                                 'motion; process noise', POSITIVE)
+    yaw_walk: float = param(0.01, 'rad/sqrt(s)', 'random walk of the yaw against the '
+                            'commanded yaw rate; process noise', POSITIVE)
+    history: float = param(0.5, 's', 'how old an odometry message may be and still be fused '
+                           'at its stamp', POSITIVE)
+
+    def __post_init__(self):
+        check_fields(self)
+
+
+class _Tick:
+    """A control tick: its time [s], the prior state there, and the input applied from it."""
+
+    __slots__ = ('t', 'x', 'P', 'u')
+
+    def __init__(self, t: float, x: np.ndarray, P: np.ndarray, u: tuple):
+        self.t, self.x, self.P, self.u = t, x, P, u
+
+
+class PoseEstimator:
+    """
+    EKF of (x [m], y [m], theta [rad]) of P driven by the commands, fed by odometry.
+
+    Call per control tick: :meth:`pose` at the tick's time, then :meth:`command` with what
+    the law commanded; call :meth:`measure` for each odometry message, whenever it arrives.
+
+    Attributes
+    ----------
+    fused : int
+        Messages fused.
+    out_of_order : int
+        Messages fused although an older stamp came after a newer one.
+    too_old : int
+        Messages dropped: stamped before the kept history (or before the first message).
+
+    """
+
+    def __init__(self, config: EstimatorConfig):
+        self.config = config
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything: no pose until the next odometry message."""
+        self._ticks = []  # _Tick, oldest first; the last is the latest tick
+        self._stamps = []  # stamps [s] of the messages within the history, sorted
+        self._poses = []  # their (measured pose, its covariance), in the same order
+        self._post = None  # (t, x, P): the estimate at the latest tick, its messages fused
+        self.fused = self.out_of_order = self.too_old = 0
+
+    @property
+    def ready(self) -> bool:
+        """Tell whether a message has arrived, so that :meth:`pose` has a value."""
+        return bool(self._ticks or self._stamps)
+
+    # -- the filter ----------------------------------------------------------------------
+
+    def _propagate(self, x, P, u, dt):
+        """Predict over ``dt`` [s] with input u = (v, omega): eq. (3), forward Euler."""
+        if dt <= 0.0:
+            return x, P
+        v, w = u
+        c, s = math.cos(x[2]), math.sin(x[2])
+        x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt])
+        F = np.array([[1.0, 0.0, -v * s * dt], [0.0, 1.0, v * c * dt], [0.0, 0.0, 1.0]])
+        qp, qw = self.config.position_walk ** 2 * dt, self.config.yaw_walk ** 2 * dt
+        return x, F @ P @ F.T + np.diag([qp, qp, qw])
+
+    def _update(self, x, P, measured):
+        """Fuse a measured pose z with covariance R: it measures the state itself (H = I)."""
+        z, R = measured
+        innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(z[2] - x[2], math.tau)])
+        K = P @ np.linalg.inv(P + R)
+        return x + K @ innovation, (np.eye(3) - K) @ P
+
+    def _fuse(self, tick: _Tick, until: float):
+        """Return (t, x, P): from tick's prior, the messages stamped in [tick.t, until) fused."""
+        t, x, P = tick.t, tick.x, tick.P
+        first, last = bisect_left(self._stamps, tick.t), bisect_left(self._stamps, until)
+        for stamp, z in zip(self._stamps[first:last], self._poses[first:last]):
+            x, P = self._propagate(x, P, tick.u, stamp - t)
+            x, P = self._update(x, P, z)
+            t = stamp
+        return t, x, P
+
+    # -- the interface ---------------------------------------------------------------------
+
+    def measure(self, stamp: float, x: float, y: float, theta: float,
+                sigma: tuple[float, float] | None = None) -> bool:
+        """
+        Take an odometry message: pose of P [m, m, rad] true at ``stamp`` [s].
+
+        ``sigma`` = (position [m], yaw [rad]) standard deviations of this message (from its
+        covariance), floored at :data:`SIGMA_FLOOR`: exact odometry makes the estimate the
+        odometry itself at its stamp. None: the configured ``position_noise`` /
+        ``yaw_noise``.
+
+        Returns
+        -------
+        bool
+            False when it was dropped, being older than the history kept.
+
+        """
+        stamp = float(stamp)
+        if self._stamps and stamp < self._stamps[-1]:
+            self.out_of_order += 1
+        if self._ticks and stamp < self._ticks[0].t:
+            self.too_old += 1
+            return False
+        if sigma is None:
+            position_sigma, yaw_sigma = self.config.position_noise, self.config.yaw_noise
+        else:
+            position_sigma, yaw_sigma = (max(float(v), SIGMA_FLOOR) for v in sigma)
+        k = bisect_right(self._stamps, stamp)
+        self._stamps.insert(k, stamp)
+        self._poses.insert(k, ((float(x), float(y), float(theta)),
+                               np.diag([position_sigma ** 2, position_sigma ** 2,
+                                        yaw_sigma ** 2])))
+        self.fused += 1
+        if self._ticks and stamp <= self._post[0]:  # before what the estimate holds
+            self._replay_from(stamp)
+        return True
+
+    def pose(self, t: float) -> tuple[float, float, float] | None:
+        """
+        Return the estimate at control time ``t`` [s] (None before the first message).
+
+        Predicted from the previous tick with its command, with the messages stamped up to
+        ``t`` fused at their stamps.
+        """
+        t = float(t)
+        if not self._ticks:
+            if not self._stamps or self._stamps[0] > t:
+                return None
+            # The first message starts the estimate at its stamp, at rest until commanded.
+            z, R = self._poses[0]
+            first = _Tick(self._stamps[0], np.array(z), R, (0.0, 0.0))
+            del self._stamps[0], self._poses[0]
+            self._ticks.append(first)
+            self._post = self._fuse(first, math.nextafter(first.t, math.inf))
+        previous = self._ticks[-1]
+        if bisect_right(self._stamps, self._post[0]) < bisect_left(self._stamps, t):
+            self._post = self._fuse(previous, t)  # messages stamped since it
+        t0, x, P = self._post
+        x, P = self._propagate(x, P, previous.u, t - t0)
+        if t > previous.t:
+            tick = _Tick(t, x, P, previous.u)
+            self._ticks.append(tick)
+        else:  # the same tick again (or the first message's): no new one
+            tick = previous
+        self._post = self._fuse(tick, math.nextafter(t, math.inf))
+        self._forget(t)
+        return float(self._post[1][0]), float(self._post[1][1]), float(self._post[1][2])
+
+    def command(self, v: float, omega: float) -> None:
+        """Record the command of the latest tick: it drives the prediction from there."""
+        if self._ticks:
+            self._ticks[-1].u = (float(v), float(omega))
+
+    # -- delayed messages ------------------------------------------------------------------
+
+    def _replay_from(self, stamp: float) -> None:
+        """Predict every tick after ``stamp`` again, with the message stamped then."""
+        ticks = self._ticks
+        k = bisect_right([tick.t for tick in ticks], stamp) - 1
+        for i in range(k, len(ticks) - 1):
+            nxt = ticks[i + 1]
+            t, x, P = self._fuse(ticks[i], nxt.t)
+            nxt.x, nxt.P = self._propagate(x, P, ticks[i].u, nxt.t - t)
+        last = ticks[-1]
+        self._post = self._fuse(last, math.nextafter(last.t, math.inf))
+
+    def _forget(self, now: float) -> None:
+        """Drop ticks and messages older than the history (keeping one tick before it)."""
+        horizon = now - self.config.history
+        ticks = self._ticks
+        drop = 0
+        while drop + 1 < len(ticks) and ticks[drop + 1].t <= horizon:
+            drop += 1
+        if drop:
+            del ticks[:drop]
+            old = bisect_left(self._stamps, ticks[0].t)
+            if old:
+                del self._stamps[:old], self._poses[:old]

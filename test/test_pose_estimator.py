@@ -1,0 +1,126 @@
+"""The pose estimator: exact odometry passes through, latency compensated, noise smoothed."""
+
+import math
+
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator
+from nfmr_dlsmc.core.validation import ParameterError
+import numpy as np
+import pytest
+
+DT = 0.001  # [s] control period
+V, W = 0.5, 0.3  # [m/s], [rad/s] a steady turn
+
+
+def truth(t):
+    """Pose of a unicycle turning at (V, W) from (1, 4, 0) [m, m, rad]."""
+    th = W * t
+    return 1.0 + V / W * math.sin(th), 4.0 + V / W * (1.0 - math.cos(th)), th
+
+
+def drive(estimator, seconds, rate, latency, sigma=0.0, seed=0, swap=False):
+    """
+    Close the estimator's loop on the turn: odometry every 1/rate s, ``latency`` s late.
+
+    Returns the per-tick (estimate - truth) and (latest odometry - truth) [m, m, rad].
+    With ``swap``, every other message comes one period and one tick later still, after
+    the next one (out of order).
+    """
+    rng = np.random.default_rng(seed)
+    period, late = round(1.0 / (rate * DT)), round(latency / DT)
+    in_flight, latest = [], None
+    est_err, odom_err = [], []
+    for k in range(round(seconds / DT)):
+        t = k * DT
+        if k % period == 0:
+            x, y, th = truth(t)
+            z = (x + rng.normal(0, sigma), y + rng.normal(0, sigma), th + rng.normal(0, sigma))
+            later = period + 1 if swap and (k // period) % 2 else 0
+            in_flight.append((k + late + later, t, z))
+        arrived = [m for m in in_flight if m[0] <= k]
+        in_flight = [m for m in in_flight if m[0] > k]
+        for _, stamp, z in arrived:
+            estimator.measure(stamp, *z, (sigma, sigma))
+            latest = z
+        pose = estimator.pose(t)
+        if pose is None:
+            continue
+        estimator.command(V, W)
+        real = truth(t)
+        est_err.append(np.subtract(pose, real))
+        odom_err.append(np.subtract(latest, real))
+    return np.array(est_err), np.array(odom_err), in_flight
+
+
+def test_nothing_before_the_first_message():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    assert estimator.pose(0.0) is None and not estimator.ready
+    estimator.measure(0.005, 1.0, 2.0, 0.5)
+    assert estimator.pose(0.004) is None  # stamped after this tick
+    assert estimator.pose(0.005) == pytest.approx((1.0, 2.0, 0.5))
+
+
+def test_exact_odometry_of_every_tick_passes_through():
+    est, odom, _ = drive(PoseEstimator(EstimatorConfig(enabled=True)), 2.0, 1000.0, 0.0)
+    np.testing.assert_allclose(est, odom, atol=1e-8)
+
+
+@pytest.mark.parametrize('rate, latency', [(100.0, 0.010), (50.0, 0.040)])
+def test_latency_is_compensated_by_prediction(rate, latency):
+    est, odom, _ = drive(PoseEstimator(EstimatorConfig(enabled=True)), 3.0, rate, latency)
+    # After the first second: the estimate began at the first message, knowing no command
+    # from before it (the robot it serves stands still until then).
+    est, odom = est[1000:], odom[1000:]
+    lag = V * latency  # the odometry is this far behind [m]
+    assert np.percentile(np.hypot(odom[:, 0], odom[:, 1]), 50) > 0.9 * lag
+    # The estimate is the truth up to forward Euler's error over the latency.
+    assert np.max(np.hypot(est[:, 0], est[:, 1])) < 0.01 * lag
+    assert np.max(np.abs(est[:, 2])) < 1e-5
+
+
+def test_noise_is_smoothed():
+    sigma = 0.001  # [m], [rad]
+    config = EstimatorConfig(enabled=True, position_walk=0.002, yaw_walk=0.002)
+    est, odom, _ = drive(PoseEstimator(config), 5.0, 100.0, 0.010, sigma=sigma, seed=3)
+    tail = slice(1000, None)  # after the first second
+    rms = lambda e: float(np.sqrt(np.mean(e ** 2)))  # noqa: E731
+    assert rms(est[tail, :2]) < 0.5 * sigma and rms(est[tail, 2]) < 0.5 * sigma
+    assert rms(odom[tail, :2]) > 0.9 * sigma  # what the law would see without it
+
+
+def test_messages_out_of_order_end_in_the_same_estimate():
+    config = EstimatorConfig(enabled=True)
+    in_order, swapped = PoseEstimator(config), PoseEstimator(config)
+    *_, a_left = drive(in_order, 1.0, 100.0, 0.020, sigma=0.001, seed=5)
+    *_, b_left = drive(swapped, 1.0, 100.0, 0.020, sigma=0.001, seed=5, swap=True)
+    assert swapped.out_of_order > 0 and in_order.out_of_order == 0
+    # Once every message has arrived, the estimate is the same.
+    for estimator, left in ((in_order, a_left), (swapped, b_left)):
+        for _, stamp, z in sorted(left, key=lambda m: m[0]):
+            estimator.measure(stamp, *z, (0.001, 0.001))
+    assert swapped.fused == in_order.fused
+    end = 0.999
+    np.testing.assert_allclose(in_order.pose(end), swapped.pose(end), atol=1e-12)
+
+
+def test_a_message_older_than_the_history_is_dropped_and_counted():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, history=0.1))
+    drive(estimator, 1.0, 100.0, 0.0)
+    before = estimator.pose(1.0)
+    assert not estimator.measure(0.5, 9.0, 9.0, 1.0)  # 0.5 s old: beyond 0.1 s of history
+    assert estimator.too_old == 1
+    assert estimator.pose(1.0) == pytest.approx(before, abs=1e-12)
+
+
+def test_reset_forgets_everything():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    drive(estimator, 0.2, 100.0, 0.0)
+    estimator.reset()
+    assert estimator.pose(0.3) is None and estimator.fused == 0
+
+
+@pytest.mark.parametrize('name, value', [('position_noise', 0.0), ('yaw_walk', -1.0),
+                                         ('history', math.nan)])
+def test_bad_settings_name_the_parameter(name, value):
+    with pytest.raises(ParameterError) as info:
+        EstimatorConfig(**{name: value})
+    assert info.value.parameter == f'estimator.{name}'
