@@ -214,7 +214,7 @@ def test_twist_stamped_on_request(setup):
     ('inner.eps', 'small', "inner.eps = 'small': must be of type double"),
     ('inner.eps', 4, 'inner.eps = 4.0 rad: must be < pi'),  # an integer is a number
     ('outer.gain', 1.0, 'outer.gain = 1.0: unknown parameter'),
-    ('tick_source', 'timer', "tick_source = 'timer': must be one of odom, clock"),
+    ('tick_source', 'timer', "tick_source = 'timer': must be one of odom, sim_clock, clock"),
     ('trajectory.name', 'spiral', "trajectory.name = 'spiral'"),
 ])
 def test_invalid_start_parameters_stop_the_node(name, value, message):

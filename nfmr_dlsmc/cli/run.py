@@ -10,6 +10,7 @@ import sys
 
 from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
 from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.ros.launcher import run, RunOptions
 
 
@@ -22,6 +23,9 @@ def _parser() -> argparse.ArgumentParser:
                              '(default: config/robot_case1.yaml, the robot profile; '
                              "config/paper_case1.yaml holds the paper's law)")
     parser.add_argument('--mode', choices=('lockstep', 'realtime'), default='lockstep')
+    parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
+                        help="the robot's odometry from a preset instead of the file's sim "
+                             'section (ideal, good, harsh); metrics are of the ground truth')
     parser.add_argument('--duration', type=float, default=100.0, help='simulated time [s]')
     parser.add_argument('--out', type=Path, default=Path('runs'), help='parent of run folders')
     parser.add_argument('--no-record', action='store_true', help='do not write a bag')

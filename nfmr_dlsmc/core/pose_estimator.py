@@ -45,7 +45,8 @@ class EstimatorConfig:
 
     enabled: bool = param(False, '', 'estimate the pose of P at each tick (an EKF on the '
                           'unicycle model, fed the commanded v and omega; doc/design.md, '
-                          'D11) instead of taking the latest odometry as it is', FLAG)
+                          'D11) instead of taking the latest odometry as it is', FLAG,
+                          read_only=True)
     position_noise: float = param(0.001, 'm', 'standard deviation of the odometry position '
                                   'the filter assumes', POSITIVE)
     yaw_noise: float = param(0.001, 'rad', 'standard deviation of the odometry yaw the '

@@ -30,7 +30,10 @@ bad parameter then ends it as a user error) and activates when started, so
 ``autostart: false`` and drives the transitions.
 
 Ticks: ``tick_source: odom`` runs one control step per odometry message (lockstep with
-the sim: exactly one command per physics step); ``tick_source: clock`` runs a dedicated
+the sim: exactly one command per physics step); ``tick_source: sim_clock`` one per
+``/clock`` message (lockstep with a sim whose odometry comes at a lower rate, or late: the
+pose estimator, ``estimator.*``, supplies the pose between messages); ``tick_source: clock``
+runs a dedicated
 thread, while active, that sleeps to absolute deadlines at ``control_rate`` on the node
 clock (the wall clock, or the sim's ``/clock`` under ``use_sim_time``).
 """
@@ -58,6 +61,7 @@ from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from visualization_msgs.msg import MarkerArray
 
@@ -116,6 +120,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._active = False  # whether odometry is taken and commands are published
         self._publishers_of_session = []
         self._odom_sub = None  # while active
+        self._clock_sub = None  # while active with tick_source sim_clock
         self._active_timers = []  # the watchdog and the markers, while active
         self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
         self._reference = None  # (x_d [m], y_d [m], theta_d [rad]) of the latest tick
@@ -193,6 +198,11 @@ class ControllerNode(SchemaLifecycleNode):
             self._publish_path()
             self._odom_sub = self.create_subscription(Odometry, 'odom', self._on_odom,
                                                       COMMAND_QOS)
+            if values['tick_source'] == 'sim_clock':
+                # After the odometry's subscription: a message of both ready at once is taken
+                # in that order, the odometry of a step before the tick of its /clock.
+                self._clock_sub = self.create_subscription(Clock, '/clock', self._on_clock,
+                                                           COMMAND_QOS)
             self._active_timers = [self.create_timer(values['watchdog_period'], self._watchdog),
                                    self.create_timer(MARKER_PERIOD, self._publish_markers)]
             self._diag_timer.reset()  # a full second of activity before the first figures
@@ -239,9 +249,10 @@ class ControllerNode(SchemaLifecycleNode):
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 
     def _drop_active_entities(self) -> None:
-        if self._odom_sub is not None:
-            self.destroy_subscription(self._odom_sub)
-            self._odom_sub = None
+        for subscription in (self._odom_sub, self._clock_sub):
+            if subscription is not None:
+                self.destroy_subscription(subscription)
+        self._odom_sub = self._clock_sub = None
         for timer in self._active_timers:
             self.destroy_timer(timer)
         self._active_timers = []
@@ -281,7 +292,10 @@ class ControllerNode(SchemaLifecycleNode):
         p = msg.pose.pose
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         wall = time.monotonic()
-        by_odom = self._values['tick_source'] == 'odom'
+        source = self._values['tick_source']
+        covariance = msg.pose.covariance
+        sigma = (math.sqrt(max(covariance[0], covariance[7], 0.0)),
+                 math.sqrt(max(covariance[35], 0.0)))
         with self._lock:
             if not self._active:
                 return
@@ -289,9 +303,14 @@ class ControllerNode(SchemaLifecycleNode):
                 p.position.x, p.position.y,
                 yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
                                     p.orientation.w), wall,
-                stamp if by_odom else self._now(), stamp, msg.header.frame_id)
-        if by_odom and accepted:
+                self._now() if source == 'clock' else stamp, stamp, msg.header.frame_id,
+                sigma)
+        if source == 'odom' and accepted:
             self._tick(stamp)
+
+    def _on_clock(self, msg: Clock) -> None:
+        """tick_source sim_clock: one step per simulated step, at its time."""
+        self._tick(msg.clock.sec + msg.clock.nanosec * 1e-9)
 
     def _now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
@@ -310,10 +329,11 @@ class ControllerNode(SchemaLifecycleNode):
         elif out.report:
             self.get_logger().info(out.report)
         self.ticks += 1
-        # Periods on the clock that drives the ticks: in lockstep (tick_source odom) the
-        # odometry stamps, so a sim slower than real time is no overrun; compute on the wall.
-        by_odom = self._values['tick_source'] == 'odom'
-        self._stats.record(control_time if by_odom else start, time.monotonic() - start)
+        # Periods on the clock that drives the ticks: in lockstep (tick_source odom or
+        # sim_clock) simulated time, so a sim slower than real time is no overrun; compute on
+        # the wall.
+        lockstep = self._values['tick_source'] != 'clock'
+        self._stats.record(control_time if lockstep else start, time.monotonic() - start)
 
     def _twist(self, v: float, omega: float):
         """Return the ``cmd_vel`` message of (v [m/s], omega [rad/s])."""
@@ -361,7 +381,7 @@ class ControllerNode(SchemaLifecycleNode):
 
     def _watchdog(self) -> None:
         """Stale odometry stops the robot even when no odometry arrives to tick on."""
-        if self._values['tick_source'] != 'odom' or not self.session.started:
+        if self._values['tick_source'] == 'clock' or not self.session.started:
             return
         with self._lock:
             stale = self.session.odometry_age(time.monotonic()) > self.session.odom_timeout

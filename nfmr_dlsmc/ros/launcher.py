@@ -27,6 +27,7 @@ from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
@@ -99,6 +100,8 @@ class RunOptions:
         Skip the in-process pybullet and kinematic runs of the end table.
     animate : bool
         Also write ``run.gif``, an animation of the robot from the bag, into the run folder.
+    sensing : str or None
+        A sensing preset replacing the file's odometry (``--sensing``).
 
     """
 
@@ -112,6 +115,7 @@ class RunOptions:
     stall_timeout: float
     no_compare: bool
     animate: bool = False
+    sensing: str | None = None
 
 
 def run(options: RunOptions) -> int:
@@ -135,7 +139,10 @@ def run(options: RunOptions) -> int:
     """
     config = options.config or shipped_config('robot_case1.yaml')
     params = controller_params(load_params_file(config, 'controller'))
-    settings = robot_plant('pybullet').settings(load_params_file(config, 'sim'))
+    sim_flat = load_params_file(config, 'sim')
+    if options.sensing is not None:
+        sim_flat = with_sensing(sim_flat, options.sensing)
+    settings = robot_plant('pybullet').settings(sim_flat)
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
@@ -205,18 +212,28 @@ def _sim_args(config: Path, options: RunOptions) -> list[str]:
     return ['--ros-args', '--params-file', str(config), '-p', f'mode:={options.mode}',
             '-p', f"gui:={'true' if options.gui else 'false'}",
             '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
-            '-p', f'max_time:={float(options.duration)!r}']
+            '-p', f'max_time:={float(options.duration)!r}',
+            *(arg for key, value in _sensing_values(options.sensing).items()
+              for arg in ('-p', f'{key}:={float(value)!r}'))]
+
+
+def _sensing_values(preset: str | None) -> dict:
+    """Return the sim parameters a sensing preset sets ({} for None)."""
+    return {} if preset is None else dict(SENSING_PRESETS[preset])
 
 
 def _controller_args(config: Path, options: RunOptions) -> list[str]:
     """Return the controller's ROS arguments: no autostart, the path over the run."""
+    # On the sim's time in both modes: the trajectory runs on simulated time, so a sim
+    # slower than real time slows the run down instead of breaking it.
     args = ['--ros-args', '--params-file', str(config), '-p', 'autostart:=false',
-            '-p', f'path_horizon:={float(options.duration)!r}']
+            '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true']
     if options.mode == 'realtime':
         return [*args, '-p', 'tick_source:=clock']
-    # In lockstep a slow step on a busy machine is no fault: only a sim that stopped for
-    # good should stop the robot.
-    return [*args, '-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
+    # A tick per simulated step, whatever the odometry's rate. A slow step on a busy
+    # machine is no fault: only a sim that stopped for good should stop the robot.
+    return [*args, '-p', 'tick_source:=sim_clock',
+            '-p', f'odom_timeout:={LOCKSTEP_ODOM_TIMEOUT!r}']
 
 
 @dataclass

@@ -82,8 +82,10 @@ class NodeOptions:
     """Options of the controller node itself, beside the control law."""
 
     tick_source: str = param('odom', '', 'odom: one step per odometry message (lockstep); '
-                             'clock: own loop at control_rate', one_of('odom', 'clock'),
-                             read_only=True)
+                             'sim_clock: one step per /clock message (lockstep with a sim '
+                             'whose odometry is slower than its steps); clock: own loop at '
+                             'control_rate on the node clock',
+                             one_of('odom', 'sim_clock', 'clock'), read_only=True)
     twist_stamped: bool = param(False, '', 'publish cmd_vel as TwistStamped', FLAG,
                                 read_only=True)
     watchdog_period: float = param(0.01, 's', 'how often stale odometry is checked',

@@ -5,13 +5,17 @@ One tracking run as the controller node drives it, without ROS.
 decides each tick what to command: before the first valid odometry, nothing; after it, the
 DLSMC output mapped to the four wheels; with stale or non-finite odometry, zero speed with
 the steering held, until fresh odometry returns. Trajectory time starts at the first valid
-odometry and runs on the control clock; it keeps running while the robot is stopped.
+odometry and runs on the control clock; it keeps running while the robot is stopped. With
+``estimator.enabled`` the pose of a tick is the estimate at the tick's time
+(:class:`~nfmr_dlsmc.core.pose_estimator.PoseEstimator`: odometry fused at its stamps, the
+commands since predicted), otherwise the latest odometry.
 """
 
 from dataclasses import dataclass
 import math
 
 from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.runtime.params import ControllerParams
@@ -94,6 +98,7 @@ class TrackingSession:
         self.confirm_messages = confirm_messages
         self._new_base = []  # (stamp, control time) [s] of messages off the time base
         self.controller = DlsmcController(params.dlsmc)
+        self.estimator = PoseEstimator(params.estimator) if params.estimator.enabled else None
         self._pose = None  # latest valid (x, y, theta)
         self._pose_wall = None  # wall time [s] it arrived
         self._bad_odometry = None  # (kind, reason) while the latest odometry is invalid
@@ -111,17 +116,21 @@ class TrackingSession:
         return self._t0 is not None
 
     def set_params(self, params: ControllerParams) -> None:
-        """Take new gains or limits; they take effect at the next tick."""
+        """Take new gains, limits or estimator noise; they take effect at the next tick."""
         self.params = params
         self.controller.config = params.dlsmc
+        if self.estimator is not None:
+            self.estimator.config = params.estimator
 
     def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
                     control_time: float, stamp: float | None = None,
-                    frame_id: str | None = None) -> bool:
+                    frame_id: str | None = None, sigma=None) -> bool:
         """
         Take odometry of P: pose [m, m, rad], ``stamp`` and ``frame_id``.
 
-        It was received at ``wall_time`` / ``control_time`` [s].
+        It was received at ``wall_time`` / ``control_time`` [s]. With the estimator on, it is
+        fused at its stamp (``sigma``: its position and yaw standard deviations, from its
+        covariance, see :meth:`PoseEstimator.measure`).
 
         Returns
         -------
@@ -166,6 +175,8 @@ class TrackingSession:
         self._pose = (x, y, theta)
         self._pose_wall = wall_time
         self._stamp = stamp
+        if self.estimator is not None:
+            self.estimator.measure(stamp, x, y, theta, sigma)
         if self._t0 is None:
             self._t0 = control_time
         return True
@@ -181,6 +192,8 @@ class TrackingSession:
     def _restart(self) -> None:
         """Start tracking over: the odometry source started over."""
         self.controller.reset()
+        if self.estimator is not None:
+            self.estimator.reset()
         self._pose = self._t0 = None
         self._t = 0.0
         self._tracked_last = False
@@ -228,6 +241,8 @@ class TrackingSession:
         x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
         xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
         x, y, theta = self._pose
+        if self.estimator is not None:
+            x, y, theta = self.estimator.pose(control_time) or self._pose
         ctrl = self.controller
         if fault:
             v = omega = 0.0
@@ -239,6 +254,8 @@ class TrackingSession:
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
             self._steer = steer
+        if self.estimator is not None:
+            self.estimator.command(v, omega)
         state = (t, x, y, theta, x_d, y_d, float(reference_heading(xdot_d, ydot_d)),
                  ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
                  ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,

@@ -307,10 +307,11 @@ class SimNode(SchemaNode):
 
     def _publish(self, out, aux: bool) -> None:
         stamp = time_message(out.time)
-        self._clock_pub.publish(Clock(clock=stamp))
         if out.odometry is not None:  # stamped when it was measured, latency ago
             self._odom_pub.publish(odometry_message(
                 out.odometry.state, time_message(out.odometry.time), self._odom_covariance))
+        # After the odometry: a controller ticking on /clock has the step's odometry first.
+        self._clock_pub.publish(Clock(clock=stamp))
         every = self.settings.marker_every
         if every and self.steps % every == 0:
             p, chassis = out.point_p, self.world.config.chassis
