@@ -80,7 +80,8 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
         return {'t_conv': result.t_conv, 'iae': result.iae,
                 'final_distance': result.final_distance}
     tasks = [(tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
-              hold_last, world, params.geometry, params.steering) for x0 in starts.tolist()]
+              hold_last, world, params.geometry, params.steering, params.estimator)
+             for x0 in starts.tolist()]
     rows = [None] * len(tasks)
     with worker_pool(jobs, quiet=True) as pool:
         futures = {pool.submit(_run_start, task): k for k, task in enumerate(tasks)}
@@ -96,15 +97,16 @@ def _run_start(task: tuple) -> dict:
     Run one start in a worker process: the :data:`RUN_KEYS` figures (NaN where undefined).
 
     ``task`` is (x0, plant, DlsmcConfig, trajectory, duration [s], disturbance, hold_last
-    [s], world, geometry, steering); the last three are used on pybullet only. The hold
-    figures cover the last ``hold_last`` seconds (the whole run if it is shorter).
+    [s], world, geometry, steering, estimator); the last four are used on pybullet only.
+    The hold figures cover the last ``hold_last`` seconds (the whole run if it is shorter).
     """
     x0, plant, config, trajectory, duration, disturbance, hold_last, world, geometry, \
-        steering = task
+        steering, estimator = task
     controller = DlsmcController(config)
     if plant == 'pybullet':
         result = robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
-                                                  geometry, steering, disturbance)
+                                                  geometry, steering, disturbance, None,
+                                                  estimator)
     else:
         result = simulate(controller, trajectory, x0, duration, config.dt, disturbance)
     figures = simulation_metrics(result, hold_from=max(duration - hold_last, 0.0)).as_dict()

@@ -32,8 +32,10 @@ from nfmr_dlsmc.cli.common import (
     positive_number,
     RECORDED_STEP_BYTES,
     run_command,
+    UsageError,
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 
@@ -66,6 +68,9 @@ def _parser() -> argparse.ArgumentParser:
                              'distance p99 is taken [s] (default 10; the whole run if '
                              'longer)')
     parser.add_argument('--disturbance', choices=('none', 'paper'), default='none')
+    parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
+                        help="pybullet: the robot's odometry from a preset (ideal, good, "
+                             "harsh) instead of the file's sim section")
     parser.add_argument('--params', metavar='FILE.yaml',
                         help="controller parameter file (the paper's law: batch simulator; "
                              'with a robot-profile option on, e.g. config/robot_case1.yaml, '
@@ -92,7 +97,11 @@ def _run(args) -> int:
     if args.plots:
         check_writable(args.plots, '--plots', directory=True)
     params = controller_params(load_params_file(args.params) if args.params else {})
-    world = pybullet_world(args.params, params.dlsmc.dt) if args.plant == 'pybullet' else None
+    if args.sensing is not None and args.plant != 'pybullet':
+        raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
+                         'odometry')
+    world = (pybullet_world(args.params, params.dlsmc.dt, args.sensing)
+             if args.plant == 'pybullet' else None)
     origin = start_pose(params.trajectory)
     starts = random_starts(np.random.default_rng(args.seed), origin, args.x0_range, args.n)
     how = ('batch simulator' if uses_batch(args.plant, params.dlsmc) else

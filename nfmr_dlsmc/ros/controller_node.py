@@ -322,6 +322,10 @@ class ControllerNode(SchemaLifecycleNode):
                 return
             out = self.session.tick(control_time, start)
             if out is None:
+                if self._values['tick_source'] == 'sim_clock':
+                    # Before the first odometry (late by its latency): stand still, and
+                    # answer the step so that simulated time runs on until it comes.
+                    self._publish_zero()
                 return
             self._publish(out)
         if out.report and out.stopped:

@@ -46,7 +46,9 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
+from rosgraph_msgs.msg import Clock
 
 #: Topics of a run and their types (recorded from the first message).
 RUN_TOPICS = {
@@ -161,7 +163,7 @@ def run(options: RunOptions) -> int:
     executor.add_node(manager)
     children = []
     status = 0
-    clock = _ClockWatch(recorder, executor)
+    clock = _ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
         children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
@@ -298,12 +300,18 @@ def _stop_children(children: list) -> None:
 
 
 class _ClockWatch:
-    """Spins the launcher's nodes and tracks simulated time from /clock."""
+    """Spins the launcher's nodes and tracks simulated time from /clock (recording or not)."""
 
-    def __init__(self, recorder, executor):
+    def __init__(self, recorder, executor, node):
         self.recorder = recorder
         self.executor = executor
         self.started = time.monotonic()
+        self._clock_ns = 0
+        node.create_subscription(Clock, '/clock', self._on_clock,
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+
+    def _on_clock(self, msg: Clock) -> None:
+        self._clock_ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
 
     def spin(self, seconds: float) -> None:
         """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
@@ -313,8 +321,8 @@ class _ClockWatch:
 
     @property
     def sim_time(self) -> float:
-        """Return the simulated time of the last /clock message [s] (0 without a recorder)."""
-        return 0.0 if self.recorder is None else self.recorder.last_clock_ns * 1e-9
+        """Return the simulated time of the last /clock message [s]."""
+        return self._clock_ns * 1e-9
 
     def drain(self, quiet: float = 0.5) -> None:
         """Spin until no message arrived for ``quiet`` seconds."""
@@ -368,7 +376,7 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         sim_t = clock.sim_time
         if sim_t != progress_time:
             last_progress, progress_time = now, sim_t
-        elif clock.recorder is not None and now - last_progress > stall_timeout:
+        elif now - last_progress > stall_timeout:
             sim = children[0]
             raise RunError(f'the run stalled: simulated time has stayed at {sim_t:.3f} s for '
                            f'{now - last_progress:.1f} s (--stall-timeout {stall_timeout:g} s); '
@@ -380,8 +388,6 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
                   f'{sim_t / wall if wall > 0 else 0.0:5.2f}', end='', file=sys.stderr,
                   flush=True)
             last_print = now
-        if clock.recorder is None and now - clock.started >= duration:
-            break
         if sim_t >= duration:
             break
     print(file=sys.stderr)
