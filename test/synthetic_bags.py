@@ -25,7 +25,7 @@ def state_rows(result) -> np.ndarray:
                'v': result.v, 'omega': result.omega, 'steer_limited': np.zeros(n),
                'stopped': np.zeros(n), 'eta_hat': tel['eta_hat'],
                'inner_phase': tel['inner_phase'], 'v_saturated': tel['v_saturated'],
-               'omega_saturated': tel['omega_saturated']}
+               'omega_saturated': tel['omega_saturated'], 'control_time': result.t}
     for name in STATE_FIELDS:
         columns.setdefault(name, tel.get(name, np.zeros(n)))
     return np.column_stack([columns[name] for name in STATE_FIELDS])

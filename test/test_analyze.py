@@ -1,5 +1,6 @@
 """nfmr-analyze on our bags, on an independent writer's bag, and on broken bags."""
 
+from dataclasses import replace
 import json
 from pathlib import Path
 import subprocess
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_typestore, Stores
-from synthetic_bags import state_rows, write_run_bag
+from synthetic_bags import odometry_messages, state_rows, write_run_bag
 
 ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
 
@@ -48,6 +49,23 @@ def test_metrics_of_a_bag_equal_those_of_the_run_it_records(case1, case1_bag):
                 'theta_e_iae', 'max_abs_theta_e_after_conv'):
         assert got[key] == pytest.approx(want[key], rel=1e-9, abs=1e-12), key
     assert got['iae'] == pytest.approx(13.5757, rel=0.025)  # the paper's Table 2 value
+
+
+def test_metrics_are_of_the_ground_truth_not_of_the_pose_the_controller_saw(case1, tmp_path):
+    # The controller saw its pose 2 cm off in x (biased odometry); /ground_truth, every
+    # 10 ms, has the truth. The metrics are the truth's.
+    seen = replace(case1, state=case1.state + [0.02, 0.0, 0.0])
+    truth = odometry_messages(case1.t, case1.state, every=10)
+    bag = tmp_path / 'biased'
+    write_run_bag(bag, seen, with_odom=False,
+                  extra_topics={'/ground_truth': ('nav_msgs/msg/Odometry', truth)})
+    proc = analyze(bag, '--json')
+    assert proc.returncode == 0, proc.stderr
+    got = last_json(proc)['bags'][0]['metrics']
+    want, biased = simulation_metrics(case1).as_dict(), simulation_metrics(seen).as_dict()
+    assert got['iae'] == pytest.approx(want['iae'], rel=1e-3)
+    assert got['hold_distance_p99'] == pytest.approx(want['hold_distance_p99'], abs=1e-5)
+    assert biased['hold_distance_p99'] > 0.019  # what the controller's own pose would say
 
 
 def test_a_bag_from_an_independent_writer(case1, tmp_path):

@@ -25,6 +25,7 @@ from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.ros.run_analysis import (
     animate_contents,
     ANIMATION_TOPICS,
+    GROUND_TRUTH_TOPIC,
     JOINT_TOPIC,
     metrics_table,
     plot_runs,
@@ -32,6 +33,7 @@ from nfmr_dlsmc.ros.run_analysis import (
     state_series,
     STATE_TOPIC,
     steer_joint_rates,
+    with_ground_truth,
 )
 
 
@@ -132,12 +134,12 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
         The bag cannot be read or has no controller state.
 
     """
-    topics = ANIMATION_TOPICS if animate else (STATE_TOPIC, JOINT_TOPIC)
+    topics = ANIMATION_TOPICS if animate else (STATE_TOPIC, JOINT_TOPIC, GROUND_TRUTH_TOPIC)
     contents = read_bag(path, topics=list(topics))
     warning = contents.warning()
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
-    series = state_series(contents)
+    series = with_ground_truth(state_series(contents), contents)
     return {'path': str(path), 'label': _label(path), 'series': series,
             'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
             'truncated': contents.truncated, 'contents': contents if animate else None}

@@ -33,6 +33,7 @@ from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_analysis import (
     animate_bag,
+    GROUND_TRUTH_TOPIC,
     JOINT_TOPIC,
     metrics_table,
     plot_runs,
@@ -40,6 +41,7 @@ from nfmr_dlsmc.ros.run_analysis import (
     state_series,
     STEER_FIELDS,
     steer_joint_rates,
+    with_ground_truth,
 )
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, ParamsFileError
 from nfmr_dlsmc.runtime.share import shipped_config
@@ -514,8 +516,8 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> 
     The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
     the in-process pybullet plant and the kinematic model.
     """
-    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC])
-    series = state_series(contents)
+    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC])
+    series = with_ground_truth(state_series(contents), contents)
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
                                               steer_joint_rates(contents)))]
     runs = [('ROS pybullet', series)]

@@ -94,6 +94,40 @@ def state_series(contents: BagContents) -> dict:
     return {name: rows[:, i] for i, name in enumerate(names)}
 
 
+def with_ground_truth(series: dict, contents: BagContents) -> dict:
+    """
+    Return ``series`` with the true pose of P at each tick in place of the controller's own.
+
+    The controller's pose is what it measured or estimated (noisy, late odometry); the
+    metrics are of the truth. ``/ground_truth`` (sampled more sparsely) is interpolated to
+    each tick's ``control_time``; ticks outside it are dropped. The controller's pose stays
+    as ``x_seen``, ``y_seen``, ``theta_seen`` (present only when the truth was used). Bags
+    without ground truth or ``control_time`` (a real robot, older bags), or whose truth is
+    on another clock than the ticks, keep the controller's pose.
+    """
+    truth = contents.of(GROUND_TRUTH_TOPIC)
+    if not truth or 'control_time' not in series:
+        return series
+    odom = [deserialize_message(m.data, Odometry) for m in truth]
+    stamps = np.array([o.header.stamp.sec + o.header.stamp.nanosec * 1e-9 for o in odom])
+    order = np.argsort(stamps, kind='stable')
+    stamps = stamps[order]
+    x = np.array([o.pose.pose.position.x for o in odom])[order]
+    y = np.array([o.pose.pose.position.y for o in odom])[order]
+    q = [o.pose.pose.orientation for o in odom]
+    yaw = np.unwrap(np.array([yaw_from_quaternion(r.x, r.y, r.z, r.w) for r in q])[order])
+    at = series['control_time']
+    inside = (at >= stamps[0]) & (at <= stamps[-1])
+    if np.count_nonzero(inside) < 0.9 * len(at):
+        return series  # not on the same clock
+    kept = {k: v[inside] for k, v in series.items()}
+    at = at[inside]
+    kept.update(x_seen=kept['x'], y_seen=kept['y'], theta_seen=kept['theta'],
+                x=np.interp(at, stamps, x), y=np.interp(at, stamps, y),
+                theta=np.interp(at, stamps, yaw))
+    return kept
+
+
 def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
     """
     Return (stamps [s], steer joint velocities (N, 4) [rad/s]) of the bag's joint states.

@@ -25,7 +25,7 @@ import numpy as np
 STATE_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_r', 'x_e', 'y_e', 'theta_d',
                 'theta_e', 's_x', 's_y', 'eta_hat', 'inner_phase', 'v', 'omega', 'v_raw',
                 'omega_raw', 'v_saturated', 'omega_saturated', 'steer_limited', 'stopped',
-                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr')
+                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr', 'control_time')
 
 
 @dataclass(frozen=True)
@@ -260,5 +260,6 @@ class TrackingSession:
                  ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
                  ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
                  ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
-                 float(limited), float(bool(fault))) + tuple(steer.tolist())
+                 float(limited), float(bool(fault))) + tuple(steer.tolist()) + (
+                     float(control_time),)
         return TickOutput(v, omega, steer, wheels, state, bool(fault), report)
