@@ -124,8 +124,9 @@ def node_figures(seconds: float) -> dict:
         probe.send(0.0)
         probe.diagnostics.clear()
         time.sleep(seconds + 1.5)
-        windows = [{kv.key: float(kv.value) for kv in d.status[0].values}
-                   for d in probe.diagnostics if d.status and d.status[0].values][1:]
+        # By key: the diagnostics also carry text (the lifecycle state).
+        windows = [_numeric_values(d.status[0]) for d in probe.diagnostics
+                   if d.status and any(kv.key == 'rate_hz' for kv in d.status[0].values)][1:]
         out['controller_loop'] = {
             'windows': len(windows),
             'mean_rate_hz': float(np.mean([w['rate_hz'] for w in windows])),
@@ -154,6 +155,17 @@ def node_figures(seconds: float) -> dict:
         probe.destroy_node()
         rclpy.try_shutdown()
     return out
+
+
+def _numeric_values(status) -> dict:
+    """Return the values of a DiagnosticStatus that are numbers, by key."""
+    found = {}
+    for kv in status.values:
+        try:
+            found[kv.key] = float(kv.value)
+        except ValueError:
+            continue
+    return found
 
 
 def bag_writer_throughput(messages: int = 200_000) -> dict:
