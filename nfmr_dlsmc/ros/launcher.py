@@ -28,6 +28,7 @@ from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
@@ -43,7 +44,12 @@ from nfmr_dlsmc.ros.run_analysis import (
     steer_joint_rates,
     with_ground_truth,
 )
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file, ParamsFileError
+from nfmr_dlsmc.runtime.params import (
+    controller_params,
+    load_params_file,
+    NodeOptions,
+    ParamsFileError,
+)
 from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
 from rclpy.experimental import EventsExecutor
@@ -70,6 +76,7 @@ STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is k
 STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 LOCKSTEP_ODOM_TIMEOUT = 2.0  # [s] the controller's odometry timeout in lockstep runs
+ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
 
 
 class RunError(NfmrError, RuntimeError):
@@ -142,7 +149,8 @@ def run(options: RunOptions) -> int:
 
     """
     config = options.config or shipped_config('robot_case1.yaml')
-    params = controller_params(load_params_file(config, 'controller'))
+    controller_flat = load_params_file(config, 'controller')
+    params = controller_params(controller_flat)
     sim_flat = load_params_file(config, 'sim')
     if options.sensing is not None:
         sim_flat = with_sensing(sim_flat, options.sensing)
@@ -150,6 +158,9 @@ def run(options: RunOptions) -> int:
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
+    _check_latency(settings.world.disturbance.odom_latency,
+                   LOCKSTEP_ODOM_TIMEOUT if options.mode == 'lockstep'
+                   else float(controller_flat.get('odom_timeout', ODOM_TIMEOUT_DEFAULT)))
     run_dir = _new_run_dir(options.out, config)
     bag_dir = run_dir / 'bag'
     print(f'run folder {run_dir}', file=sys.stderr)
@@ -332,6 +343,21 @@ class _ClockWatch:
         while last != self.recorder.received + self.recorder.pending():
             last = self.recorder.received + self.recorder.pending()
             self.spin(quiet)
+
+
+def _check_latency(latency: float, odom_timeout: float) -> None:
+    """
+    Refuse odometry later than the controller's odometry timeout.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``disturbance.odom_latency``.
+
+    """
+    if latency >= odom_timeout:
+        raise ParameterError('disturbance.odom_latency', latency, 'must be below the '
+                             f"controller's odom_timeout = {odom_timeout:g} s of this run", 's')
 
 
 def _robot_mismatch(params, settings) -> str | None:
