@@ -352,3 +352,15 @@ def test_a_lockstep_run_with_slow_late_odometry_ticks_every_step(tmp_path):
     # this is 10 ms before it was published).
     assert 195 <= len(stamps) <= 201 and np.diff(stamps) == pytest.approx(0.01, abs=1e-9)
     assert stamps[0] == 0.0
+
+
+def test_the_end_says_how_the_run_kept_its_timing(short_run):
+    # In lockstep the loop's periods are on simulated time: 1 kHz exactly, no overrun.
+    code, stdout, _ = short_run
+    assert code == 0
+    line = next(line for line in stdout.splitlines() if line.startswith('timing: '))
+    rtf = float(re.search(r'sim ([0-9.]+)x real time', line).group(1))
+    assert rtf > 0.0
+    rate = float(re.search(r'controller loop ([0-9.]+) Hz', line).group(1))
+    assert rate == pytest.approx(1000.0, rel=1e-3)
+    assert ', 0 overruns' in line and 'sim braked 0 times' in line

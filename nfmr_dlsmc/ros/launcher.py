@@ -13,8 +13,10 @@ plots. The last line printed is the bag directory. The command line is
 
 import ctypes
 from dataclasses import dataclass
+import math
 import os
 from pathlib import Path
+import re
 import signal
 import subprocess
 import sys
@@ -34,8 +36,10 @@ from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_analysis import (
     animate_bag,
+    DIAGNOSTICS_TOPIC,
     GROUND_TRUTH_TOPIC,
     JOINT_TOPIC,
+    loop_figures,
     metrics_table,
     plot_runs,
     state_metrics,
@@ -176,6 +180,7 @@ def run(options: RunOptions) -> int:
     executor.add_node(manager)
     children = []
     status = 0
+    real_time_factor = math.nan
     clock = _ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
@@ -188,7 +193,8 @@ def run(options: RunOptions) -> int:
         controller.wait_until_up()
         controller.change('configure')
         controller.change('activate')
-        _wait_for_run(children, clock, options.duration, options.stall_timeout, stop)
+        real_time_factor = _wait_for_run(children, clock, options.duration,
+                                         options.stall_timeout, stop)
         # The sim has stopped stepping at the duration: let the last command arrive, then
         # stop the controller (zero speed) well within its odometry timeout, so that a run
         # that ended as planned ends without a safety stop.
@@ -216,7 +222,7 @@ def run(options: RunOptions) -> int:
         rclpy.try_shutdown()
         stop.release()
     if writer is not None and status == 0:
-        _report(bag_dir, run_dir, params, settings, options, writer.counts)
+        _report(bag_dir, run_dir, params, settings, options, writer.counts, real_time_factor)
     if writer is not None:
         print(bag_dir)
     return status
@@ -382,9 +388,14 @@ def _robot_mismatch(params, settings) -> str | None:
 
 
 def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
-                  stall_timeout: float, stop: StopRequest) -> None:
+                  stall_timeout: float, stop: StopRequest) -> float:
     """
     Spin until the sim reaches ``duration``, showing progress.
+
+    Returns
+    -------
+    float
+        The sim's real-time factor from its first step to the end: simulated over wall time.
 
     Raises
     ------
@@ -396,6 +407,7 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     """
     last_print = 0.0
     last_progress, progress_time = clock.started, -1.0
+    first = None  # (wall [s], simulated time [s]) when the sim was first seen stepping
     while True:
         clock.spin(0.05)
         stop.check()
@@ -404,6 +416,8 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         sim_t = clock.sim_time
         if sim_t != progress_time:
             last_progress, progress_time = now, sim_t
+            if first is None and sim_t > 0.0:
+                first = (now, sim_t)
         elif now - last_progress > stall_timeout:
             sim = children[0]
             raise RunError(f'the run stalled: simulated time has stayed at {sim_t:.3f} s for '
@@ -419,6 +433,9 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         if sim_t >= duration:
             break
     print(file=sys.stderr)
+    if first is None or now <= first[0]:
+        return math.nan
+    return (sim_t - first[1]) / (now - first[0])
 
 
 def _check_children(children: list) -> None:
@@ -535,14 +552,16 @@ class _ControllerLifecycle:
                            f'{controller.log}:\n{controller.tail()}')
 
 
-def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> None:
+def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
+            real_time_factor: float) -> None:
     """
     Print the metrics table and write plots.
 
     The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
     the in-process pybullet plant and the kinematic model.
     """
-    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC])
+    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC,
+                                         DIAGNOSTICS_TOPIC])
     series = with_ground_truth(state_series(contents), contents)
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
                                               steer_joint_rates(contents)))]
@@ -565,8 +584,24 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts) -> 
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
+    print(_timing_line(real_time_factor, loop_figures(contents), run_dir / 'sim.log'))
     if options.animate:
         _animate(bag_dir, run_dir / 'run.gif')
+
+
+def _timing_line(real_time_factor: float, loop: dict | None, sim_log: Path) -> str:
+    """Return the run's timing: the sim's pace, the controller's loop, the sim's braking."""
+    log = sim_log.read_text() if sim_log.is_file() else ''
+    braking = sum(1 for line in log.splitlines()
+                  if 'braking' in line and 'no command received yet' not in line)
+    behind = re.findall(r'slower than real time: ([0-9.]+) s behind', log)
+    parts = [f'timing: sim {real_time_factor:.2f}x real time'
+             + (f' ({behind[-1]} s behind the wall clock)' if behind else '')]
+    if loop:
+        parts.append(f"controller loop {loop['rate_hz']:.1f} Hz, period p99 "
+                     f"{loop['period_p99_ms']:.2f} ms, {loop['overruns']:.0f} overruns")
+    parts.append(f'sim braked {braking} times for a missing or invalid command')
+    return '; '.join(parts)
 
 
 def _animate(bag_dir: Path, out: Path) -> None:

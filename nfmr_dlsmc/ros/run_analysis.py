@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 import time
 
+from diagnostic_msgs.msg import DiagnosticArray
 import matplotlib
 import matplotlib.pyplot as plt
 from nav_msgs.msg import Odometry
@@ -44,6 +45,7 @@ from visualization_msgs.msg import MarkerArray
 STATE_TOPIC = '/controller_state'
 JOINT_TOPIC = '/joint_states'
 GROUND_TRUTH_TOPIC = '/ground_truth'
+DIAGNOSTICS_TOPIC = '/diagnostics'
 ODOM_TOPIC = '/odom'
 MARKER_TOPIC = '/robot_markers'
 #: The topics an animation reads.
@@ -92,6 +94,32 @@ def state_series(contents: BagContents) -> dict:
         raise BagError(f'{contents.path}: {STATE_TOPIC} messages do not all have '
                        f'{len(names)} values')
     return {name: rows[:, i] for i, name in enumerate(names)}
+
+
+def loop_figures(contents: BagContents) -> dict | None:
+    """
+    Return the controller loop's figures over a run from its ``/diagnostics`` windows.
+
+    ``rate_hz`` (ticks over the windows' time), ``period_p99_ms`` (the median of the windows'
+    p99), ``overruns`` (their sum) and ``windows``; None when the bag has none.
+    """
+    windows = []
+    for message in contents.of(DIAGNOSTICS_TOPIC):
+        for status in deserialize_message(message.data, DiagnosticArray).status:
+            values = {}
+            for kv in status.values:
+                try:
+                    values[kv.key] = float(kv.value)
+                except ValueError:
+                    continue  # text, such as the lifecycle state
+            if 'rate_hz' in values and values.get('ticks', 0.0) > 0.0:
+                windows.append(values)
+    if not windows:
+        return None
+    ticks = sum(w['ticks'] for w in windows)
+    return {'rate_hz': ticks / sum(w['ticks'] / w['rate_hz'] for w in windows),
+            'period_p99_ms': float(np.median([w['period_p99_ms'] for w in windows])),
+            'overruns': sum(w['overruns'] for w in windows), 'windows': len(windows)}
 
 
 def with_ground_truth(series: dict, contents: BagContents) -> dict:
