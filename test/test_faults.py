@@ -468,3 +468,40 @@ def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
         spinner.close()
         peer.destroy_node()
         context.try_shutdown()
+
+
+def test_two_runs_at_once_do_not_cross_talk(tmp_path):
+    # Each run takes a ROS domain of its own: both see exactly their own robot.
+    runs = [LoggedRun(tmp_path / name, '--duration', '2', '--no-compare')
+            for name in ('first', 'second')]
+    try:
+        outputs = [run.communicate(timeout=300) for run in runs]
+    finally:
+        for run in runs:
+            run.kill()
+    domains = set()
+    for run, (stdout, stderr) in zip(runs, outputs):
+        assert run.returncode == 0, stderr
+        assert '2001 control ticks (0 stopped by safety)' in stdout
+        domains.add(re.search(r'ROS domain (\d+),', stderr).group(1))
+    assert len(domains) == 2
+
+
+def test_another_source_on_the_runs_domain_ends_it_with_an_error(tmp_path):
+    # A second sim on the domain the run was told to use: its /clock reaches the run, which
+    # says so and does not report figures of mixed data.
+    domain = 77
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    intruder = subprocess.Popen([str(Path(sys.executable).parent / 'sim'), '--ros-args', '-p',
+                                 'mode:=realtime'], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, env=env)
+    run = LoggedRun(tmp_path, '--domain', str(domain), '--duration', '30', '--no-compare')
+    try:
+        stdout, stderr = run.communicate(timeout=300)
+    finally:
+        run.kill()
+        intruder.send_signal(signal.SIGINT)
+        intruder.wait(timeout=10)
+    assert run.returncode == 1
+    assert 'another ROS source reaches this run' in stderr
+    assert 'control ticks' not in stdout  # no figures of mixed data

@@ -24,7 +24,7 @@ from nfmr_dlsmc.core.sliding_functions import (
 )
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.runtime.params import ControllerParams
-from nfmr_dlsmc.runtime.tracking_session import TrackingSession
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 import numpy as np
 import pytest
 import yaml
@@ -349,7 +349,7 @@ def test_stale_odometry_is_reported_once_while_it_lasts():
     outs = [s.tick(0.2 + 0.01 * k, 0.2 + 0.01 * k) for k in range(3)]
     assert all(o.stopped for o in outs)
     assert outs[0].report is not None and outs[1].report is None and outs[2].report is None
-    assert s.tick(0.3, 0.3).state[-5] == 1.0  # the "stopped" field of the state
+    assert s.tick(0.3, 0.3).state[STATE_FIELDS.index('stopped')] == 1.0
 
 
 def test_the_session_integrates_over_the_measured_step():

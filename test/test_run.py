@@ -44,6 +44,7 @@ class LoggedRun:
     """
 
     def __init__(self, tmp_path, *args):
+        tmp_path.mkdir(parents=True, exist_ok=True)
         self.out = tmp_path / 'runs'
         self._stdout, self._stderr = tmp_path / 'run.stdout', tmp_path / 'run.stderr'
         with self._stdout.open('w') as out, self._stderr.open('w') as err:

@@ -23,6 +23,10 @@ def _parser() -> argparse.ArgumentParser:
                              '(default: config/robot_case1.yaml, the robot profile; '
                              "config/paper_case1.yaml holds the paper's law)")
     parser.add_argument('--mode', choices=('lockstep', 'realtime'), default='lockstep')
+    parser.add_argument('--domain', type=int, default=None, metavar='N',
+                        help='ROS domain of the run (default: a free one of this host, '
+                             'discovery kept to this host, so that no other ROS traffic '
+                             'reaches the run)')
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="the robot's odometry from a preset instead of the file's sim "
                              'section (ideal, good, harsh); metrics are of the ground truth')

@@ -59,6 +59,7 @@ from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, 
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
+from rclpy.duration import Duration
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -73,6 +74,7 @@ MARKER_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
+ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribers' acks
 _REFERENCE_FIELDS = tuple(STATE_FIELDS.index(name) for name in ('x_d', 'y_d', 'theta_d'))
 
 
@@ -245,6 +247,10 @@ class ControllerNode(SchemaLifecycleNode):
         with self._lock:
             self._active = False
             self._publish_zero()
+        # Delivered before anything else happens (a shutdown that follows would otherwise
+        # take the zero command down with the process).
+        for publisher in (self._twist_pub, self._wheel_pub, self._steer_pub):
+            publisher.wait_for_all_acked(Duration(seconds=ZERO_ACK_TIMEOUT))
         self._drop_active_entities()
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 

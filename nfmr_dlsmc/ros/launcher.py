@@ -54,6 +54,7 @@ from nfmr_dlsmc.runtime.params import (
     NodeOptions,
     ParamsFileError,
 )
+from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
 from rclpy.experimental import EventsExecutor
@@ -80,6 +81,7 @@ STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is k
 STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 LOCKSTEP_ODOM_TIMEOUT = 2.0  # [s] the controller's odometry timeout in lockstep runs
+DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
 ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
 
 
@@ -117,6 +119,9 @@ class RunOptions:
         Also write ``run.gif``, an animation of the robot from the bag, into the run folder.
     sensing : str or None
         A sensing preset replacing the file's odometry (``--sensing``).
+    domain : int or None
+        The ROS domain of the run; None: a free one of this host, discovery kept to this
+        host (:mod:`nfmr_dlsmc.runtime.ros_domain`).
 
     """
 
@@ -131,6 +136,7 @@ class RunOptions:
     no_compare: bool
     animate: bool = False
     sensing: str | None = None
+    domain: int | None = None
 
 
 def run(options: RunOptions) -> int:
@@ -165,9 +171,34 @@ def run(options: RunOptions) -> int:
     _check_latency(settings.world.disturbance.odom_latency,
                    LOCKSTEP_ODOM_TIMEOUT if options.mode == 'lockstep'
                    else float(controller_flat.get('odom_timeout', ODOM_TIMEOUT_DEFAULT)))
+    reservation = reserve_domain(options.domain)
+    try:
+        return _run(options, config, params, settings, reservation)
+    finally:
+        reservation.release()
+
+
+def _run(options: RunOptions, config: Path, params, settings, reservation) -> int:
+    """Run on the reserved domain: its environment for this process and the children."""
+    previous = {k: os.environ.get(k) for k in reservation.environment()}
+    os.environ.update(reservation.environment())
+    try:
+        return _run_on_domain(options, config, params, settings, reservation.domain)
+    finally:
+        for key, value in previous.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: int) -> int:
+    """Start, supervise, record and report the run (see :func:`run`)."""
     run_dir = _new_run_dir(options.out, config)
     bag_dir = run_dir / 'bag'
     print(f'run folder {run_dir}', file=sys.stderr)
+    print(f'ROS domain {domain}, this host only (to watch it: ROS_DOMAIN_ID={domain} '
+          'ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST)', file=sys.stderr)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     writer = None if options.no_record else BagWriter(bag_dir)
     recorder = None
@@ -324,13 +355,28 @@ class _ClockWatch:
     def __init__(self, recorder, executor, node):
         self.recorder = recorder
         self.executor = executor
+        self.node = node
         self.started = time.monotonic()
         self._clock_ns = 0
+        self.backwards = 0  # /clock messages earlier than the one before
         node.create_subscription(Clock, '/clock', self._on_clock,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
 
     def _on_clock(self, msg: Clock) -> None:
-        self._clock_ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+        ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+        if ns < self._clock_ns:
+            self.backwards += 1
+        self._clock_ns = ns
+
+    def foreign_source(self) -> str | None:
+        """Return what shows that another ROS source feeds this run's topics, or None."""
+        for topic in ('/clock', '/controller_state', '/odom'):
+            count = self.node.count_publishers(topic)
+            if count > 1:
+                return f'{count} publishers on {topic}, where the run has one'
+        if self.backwards:
+            return f'/clock went back {self.backwards} times'
+        return None
 
     def spin(self, seconds: float) -> None:
         """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
@@ -343,10 +389,16 @@ class _ClockWatch:
         """Return the simulated time of the last /clock message [s]."""
         return self._clock_ns * 1e-9
 
-    def drain(self, quiet: float = 0.5) -> None:
-        """Spin until no message arrived for ``quiet`` seconds."""
+    def drain(self, quiet: float = 0.5, longest: float = DRAIN_TIMEOUT) -> None:
+        """
+        Spin until no message arrived for ``quiet`` seconds, or ``longest`` seconds passed.
+
+        The bound: a source other than the run's children may go on publishing.
+        """
         last = -1
-        while last != self.recorder.received + self.recorder.pending():
+        end = time.monotonic() + longest
+        while last != self.recorder.received + self.recorder.pending() \
+                and time.monotonic() < end:
             last = self.recorder.received + self.recorder.pending()
             self.spin(quiet)
 
@@ -412,6 +464,11 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         clock.spin(0.05)
         stop.check()
         _check_children(children)
+        foreign = clock.foreign_source()
+        if foreign:
+            raise RunError(f'another ROS source reaches this run ({foreign}): its data is not '
+                           "the run's own; run it on a domain of its own (the default, "
+                           'without --domain)')
         now = time.monotonic()
         sim_t = clock.sim_time
         if sim_t != progress_time:
