@@ -1,16 +1,20 @@
 """
 Shared test set-up: this session's DDS traffic kept to itself, and an open-loop controller.
 
-DDS: loopback only, a domain of its own.
+DDS: loopback only, a domain of its own, held for the whole session as ``nfmr-run`` holds its
+own (so that a run of another session never takes it).
 """
 
 import os
-import random
 
 import pytest
 
+from nfmr_dlsmc.runtime.ros_domain import reserve_domain
+
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.SystemRandom().randint(1, 100)))
+if 'ROS_DOMAIN_ID' not in os.environ:
+    SESSION_DOMAIN = reserve_domain()  # released when the session's process ends
+    os.environ['ROS_DOMAIN_ID'] = str(SESSION_DOMAIN.domain)
 
 
 class _ConstantInputs:

@@ -15,6 +15,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from ros_helpers import new_context, Spinner, wait_for, wait_matched
 from std_msgs.msg import Float64MultiArray
 
@@ -237,6 +238,32 @@ def test_clock_mode_ticks_at_the_control_rate(setup):
     wait_for(lambda: len(peer.states) > n0 + 500, timeout=60, what='ticks without odometry')
     ticks, elapsed = len(peer.states) - n0, time.monotonic() - begin
     assert ticks <= 1.1 * 1000.0 * elapsed + 50  # 1 kHz, plus a burst delivered at once
+
+
+def test_with_sim_clock_odometry_ages_on_simulated_time(setup):
+    # In lockstep a busy machine stretches the wall between steps; only simulated time
+    # passing without odometry makes it stale.
+    node, peer = setup(tick_source='sim_clock', use_sim_time=True, odom_timeout=0.1)
+    clock = peer.create_publisher(Clock, '/clock', QOS)
+    wait_for(lambda: clock.get_subscription_count() >= 2, what='the clock subscriptions')
+
+    def step(t, odometry=True):
+        n = len(peer.twists)
+        if odometry:
+            peer.send_odom(1.0, 4.0, 0.0, t)
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = int(t), int(round((t - int(t)) * 1e9))
+        clock.publish(msg)
+        wait_for(lambda: len(peer.twists) > n, what='the tick of a /clock')
+        return peer.twists[-1][1].linear.x
+
+    assert step(0.001) > 0.0
+    pause = time.monotonic()
+    wait_for(lambda: time.monotonic() > pause + 0.3, what='a wall pause past the timeout')
+    assert step(0.002) > 0.0  # 1 ms of simulated time: fresh
+    speeds = [step(0.002 + 0.01 * k, odometry=False) for k in range(1, 20)]
+    assert speeds[5] > 0.0  # 51 ms: within the timeout
+    assert speeds[-1] == 0.0  # 191 ms of simulated time without odometry: stopped
 
 
 def send_odom_in(peer, frame, x, t):

@@ -12,6 +12,7 @@ import time
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nfmr_dlsmc.bag.reader import read_bag
+from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 import pytest
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -482,7 +483,7 @@ def test_two_runs_at_once_do_not_cross_talk(tmp_path):
     domains = set()
     for run, (stdout, stderr) in zip(runs, outputs):
         assert run.returncode == 0, stderr
-        assert '2001 control ticks (0 stopped by safety)' in stdout
+        assert '2001 control ticks (0 stopped by safety)' in stdout, stdout + stderr
         domains.add(re.search(r'ROS domain (\d+),', stderr).group(1))
     assert len(domains) == 2
 
@@ -490,8 +491,9 @@ def test_two_runs_at_once_do_not_cross_talk(tmp_path):
 def test_another_source_on_the_runs_domain_ends_it_with_an_error(tmp_path):
     # A second sim on the domain the run was told to use: its /clock reaches the run, which
     # says so and does not report figures of mixed data.
-    domain = 77
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    reservation = reserve_domain()  # a domain no other run takes meanwhile
+    domain = reservation.domain
+    env = dict(os.environ, **reservation.environment())
     intruder = subprocess.Popen([str(Path(sys.executable).parent / 'sim'), '--ros-args', '-p',
                                  'mode:=realtime'], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, env=env)
@@ -502,6 +504,7 @@ def test_another_source_on_the_runs_domain_ends_it_with_an_error(tmp_path):
         run.kill()
         intruder.send_signal(signal.SIGINT)
         intruder.wait(timeout=10)
+        reservation.release()
     assert run.returncode == 1
     assert 'another ROS source reaches this run' in stderr
     assert 'control ticks' not in stdout  # no figures of mixed data

@@ -297,8 +297,10 @@ class ControllerNode(SchemaLifecycleNode):
     def _on_odom(self, msg: Odometry) -> None:
         p = msg.pose.pose
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        wall = time.monotonic()
         source = self._values['tick_source']
+        # Odometry's age is judged on the clock that drives the ticks: with sim_clock the
+        # simulated time (in lockstep a slow machine stretches the wall, not the robot's time).
+        wall = max(self._now(), stamp) if source == 'sim_clock' else time.monotonic()
         covariance = msg.pose.covariance
         sigma = (math.sqrt(max(covariance[0], covariance[7], 0.0)),
                  math.sqrt(max(covariance[35], 0.0)))
@@ -326,7 +328,9 @@ class ControllerNode(SchemaLifecycleNode):
         with self._lock:  # no command after the zero of a deactivation
             if not self._active:
                 return
-            out = self.session.tick(control_time, start)
+            out = self.session.tick(
+                control_time,
+                control_time if self._values['tick_source'] == 'sim_clock' else start)
             if out is None:
                 if self._values['tick_source'] == 'sim_clock':
                     # Before the first odometry (late by its latency): stand still, and
@@ -391,7 +395,7 @@ class ControllerNode(SchemaLifecycleNode):
 
     def _watchdog(self) -> None:
         """Stale odometry stops the robot even when no odometry arrives to tick on."""
-        if self._values['tick_source'] == 'clock' or not self.session.started:
+        if self._values['tick_source'] != 'odom' or not self.session.started:
             return
         with self._lock:
             stale = self.session.odometry_age(time.monotonic()) > self.session.odom_timeout

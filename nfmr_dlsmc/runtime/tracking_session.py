@@ -67,7 +67,8 @@ class TrackingSession:
     ----------
     params : ControllerParams
     odom_timeout : float
-        Odometry older than this [s, wall clock] stops the robot.
+        Odometry older than this [s] stops the robot, on the clock of the ``wall_time`` the
+        caller gives (the wall clock; simulated time for a node ticking on ``/clock``).
     odom_frame : str
         The frame odometry must be expressed in.
     max_jump : float
