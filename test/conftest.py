@@ -7,9 +7,8 @@ own (so that a run of another session never takes it).
 
 import os
 
-import pytest
-
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
+import pytest
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 if 'ROS_DOMAIN_ID' not in os.environ:

@@ -15,8 +15,8 @@ import rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rosgraph_msgs.msg import Clock
 from ros_helpers import new_context, Spinner, wait_for, wait_matched
+from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
 
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
