@@ -12,6 +12,7 @@ setup(
         ('share/ament_index/resource_index/packages', [f'resource/{package_name}']),
         (f'share/{package_name}', ['package.xml']),
         (f'share/{package_name}/config', glob('config/*.yaml')),
+        (f'share/{package_name}/config/paths', glob('config/paths/*.csv')),
     ],
     python_requires='>=3.10',
     install_requires=[

@@ -26,7 +26,7 @@ API_RANK = 3.25
 
 #: Third-party packages each layer may import (the standard library is always allowed).
 THIRD_PARTY = {
-    'core': {'numpy'},
+    'core': {'numpy', 'scipy'},
     'baselines': {'numpy', 'yaml'},
     'plants': {'numpy', 'scipy'},
     'runtime': {'numpy', 'yaml', 'ament_index_python'},

@@ -1,0 +1,619 @@
+"""
+A reference along a path given as points: rounded corners, arc length, speed profile.
+
+:meth:`PathTrajectory.from_points` turns a list of points into a reference with the
+interface of the analytic trajectories (:mod:`nfmr_dlsmc.core.trajectories`):
+``sample(t)`` -> ``(x_d, y_d, xdot_d, ydot_d)`` [m, m, m/s, m/s] and
+``acceleration(t)`` -> ``(xddot_d, yddot_d)`` [m/s^2], for a float or a numpy array ``t``.
+
+The points are untimed, ``(x, y)`` [m], or timed, ``(t, x, y)`` [s, m, m]. The reference is
+built in four steps:
+
+1. Consecutive points closer than :data:`MERGE_DISTANCE` merge (the first is kept); a path
+   that turns back on itself (a turn over :data:`CUSP_ANGLE` at a point) is refused.
+2. Each interior corner is replaced by a circular arc tangent to both segments. Its radius
+   is :attr:`PathProfile.corner_radius`, or larger at a gentle bend: as large as cuts the
+   corner by no more than a right angle of that radius is cut, ``(sqrt(2) - 1)
+   corner_radius``, so that points given along a curve keep the curve's own radius. An arc
+   never takes more than half of either segment beside it, which may make it smaller.
+3. The rounded polyline, resampled densely at even arc length, is smoothed by a narrow
+   Gaussian (:data:`SMOOTHING` of the smallest arc radius or segment, the arcs enlarged
+   beforehand by what the smoothing takes from them) so that its curvature is continuous,
+   then fitted with a C2 cubic spline over its arc length s
+   (:class:`scipy.interpolate.CubicSpline`).
+   With ``corner_radius = 0`` the spline goes through the points themselves instead.
+4. Untimed: the speed v(s) is the least of the cruise speed, sqrt(lateral_acceleration /
+   |kappa|) and omega_max / |kappa|, then limited by a forward pass with ``acceleration``
+   from ``start_speed`` and a backward pass with ``deceleration`` to rest at the last point.
+   Between two samples of the dense grid the acceleration is constant, so time follows in
+   closed form, dt = 2 ds / (v_k + v_k+1), finite with v = 0 at the ends. Timed: s(t) is a
+   monotone cubic through the points' (t_i, s_i), at rest at the first and last stamps.
+
+Before the start (t < 0, or before the first stamp) the reference moves along the start
+tangent at the start speed (at rest with the default ``start_speed = 0``: the first point);
+after :attr:`PathTrajectory.duration` it rests at the end point.
+"""
+
+from array import array
+from bisect import bisect_right
+from dataclasses import dataclass
+import math
+from typing import ClassVar
+
+from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
+from nfmr_dlsmc.core.validation import ParameterError
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator, PPoly
+from scipy.ndimage import gaussian_filter1d
+
+__all__ = ['CUSP_ANGLE', 'MERGE_DISTANCE', 'PathError', 'PathProfile', 'PathTrajectory',
+           'SMOOTHING']
+
+#: Consecutive points closer than this merge into the first of them [m].
+MERGE_DISTANCE = 1e-3
+#: A turn sharper than this at a point is a cusp, refused: the path would reverse [rad].
+CUSP_ANGLE = math.radians(170.0)
+#: Width (standard deviation) of the Gaussian that makes the curvature continuous, as a
+#: share of the smallest corner arc radius or segment, whichever is shorter [-].
+SMOOTHING = 0.1
+
+#: A turn at a point below this is left to the spline, not rounded [rad].
+_STRAIGHT_TURN = 1e-9
+#: Spacing of the dense resampling at most [m] ...
+_SPACING = 0.01
+#: ... and at most a third of the Gaussian's width [-] ...
+_SAMPLES_PER_SIGMA = 3.0
+#: ... with this many intervals at least and at most (long paths are sampled coarser).
+_MIN_INTERVALS = 16
+_MAX_INTERVALS = 20000
+#: The Gaussian is cut off this many widths away [-].
+_TRUNCATE = 6.0
+#: Most an arc is enlarged by to make up for the smoothing [-].
+_MAX_ENLARGEMENT = 1.5
+#: Largest |curvature| the speed profile takes [1/m]: finite for any spline.
+_MAX_CURVATURE = 1e6
+#: Least sum of two neighbouring speeds of the profile [m/s]: a finite time step.
+_MIN_SPEED_SUM = 1e-9
+
+
+class PathError(ParameterError):
+    """
+    A path that cannot be followed, named ``trajectory.path``.
+
+    Attributes
+    ----------
+    index : int or None
+        The input point at fault (0 is the first point given, before merging); None when
+        the fault is the whole path's.
+    value
+        The point's coordinates, or the shape of an input that is not a list of points.
+
+    """
+
+    def __init__(self, rule: str, index: int | None = None, value=None):
+        super().__init__('trajectory.path', value, rule)
+        self.index = index
+        Exception.__init__(self, f'trajectory.path: {rule}')
+
+    def __reduce__(self):
+        """Pickle with the arguments the constructor takes."""
+        return type(self), (self.rule, self.index, self.value)
+
+
+@documented
+@dataclass(frozen=True)
+class PathProfile:
+    """How :class:`PathTrajectory` rounds a path given as points and sets its speed."""
+
+    prefix: ClassVar[str] = 'trajectory.path'
+
+    speed: float = param(0.5, 'm/s', 'cruise speed along the path', POSITIVE)
+    lateral_acceleration: float = param(0.5, 'm/s^2', 'largest v^2 kappa: in a curve the '
+                                        'speed is at most sqrt(this / kappa)', POSITIVE)
+    omega_max: float = param(1.0, 'rad/s', 'largest v kappa, the yaw rate of the reference '
+                             "(give the controller's limit)", POSITIVE)
+    acceleration: float = param(0.3, 'm/s^2', 'largest speed-up along the path', POSITIVE)
+    deceleration: float = param(0.3, 'm/s^2', 'largest slow-down along the path, which ends '
+                                'at rest', POSITIVE)
+    corner_radius: float = param(0.3, 'm', 'least radius a corner is rounded with (gentle '
+                                 'bends more, short segments less); 0: only the spline '
+                                 'through the points rounds them', NON_NEGATIVE)
+    start_speed: float = param(0.0, 'm/s', 'speed at the first point (less if stopping at '
+                               'the last point needs it)', NON_NEGATIVE,
+                               also='<= trajectory.path.speed')
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.start_speed > self.speed:
+            raise ParameterError(f'{self.prefix}.start_speed', self.start_speed,
+                                 f'must be <= {self.prefix}.speed = {self.speed:g} m/s', 'm/s')
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PathTrajectory:
+    """
+    A reference along a path given as points (build it with :meth:`from_points`).
+
+    Attributes
+    ----------
+    points : ndarray
+        The points after merging, (N, 2) of x, y [m] (read-only).
+    stamps : ndarray or None
+        Their times for a timed path, (N,) [s]; None for an untimed one.
+    profile : PathProfile
+        The speed limits and corner radius it was built with.
+    length : float
+        Arc length of the reference from start to end [m].
+    duration : float
+        Time at which it reaches the last point and stops [s].
+
+    """
+
+    points: np.ndarray
+    stamps: np.ndarray | None
+    profile: PathProfile
+    length: float
+    duration: float
+    _curve: PPoly
+    _timing: PPoly
+    _s_breaks: array
+    _s_coef: array
+    _t_breaks: array
+    _t_coef: array
+    _start: tuple
+    _end: tuple
+
+    @classmethod
+    def from_points(cls, points, profile: PathProfile | None = None) -> 'PathTrajectory':
+        """
+        Build the reference along ``points``.
+
+        Parameters
+        ----------
+        points : array_like
+            (N, 2) of x, y [m], untimed: ``profile`` sets the speed. Or (N, 3) of t, x, y
+            [s, m, m], timed: point i is reached at t_i (the speed profile is not used; the
+            reference is at rest at the first and last stamps). Stamps are >= 0 and
+            increase strictly after merging.
+        profile : PathProfile, optional
+            Speed limits and corner radius; the defaults when omitted.
+
+        Raises
+        ------
+        PathError
+            (a :class:`~nfmr_dlsmc.core.validation.ParameterError`) for fewer than 2
+            distinct points, a coordinate or stamp that is not a finite number, a cusp, or
+            stamps that do not increase; the message names the point (0 is the first).
+
+        """
+        profile = PathProfile() if profile is None else profile
+        if not isinstance(profile, PathProfile):
+            raise TypeError(f'profile must be a PathProfile, not {type(profile).__name__}')
+        xy, stamps, _ = _checked_points(points)
+        if profile.corner_radius > 0.0:
+            u, dense, vertex_u = _rounded(xy, profile.corner_radius)
+        else:
+            u, dense, vertex_u = _through_points(xy)
+        s, dense, vertex_s = _by_arc_length(u, dense, vertex_u)
+        curve = CubicSpline(s, dense, bc_type='natural')
+        arc = _arc_length(curve)
+        vertex_s = np.interp(vertex_s, s, arc)
+        s = arc
+        curve = CubicSpline(s, dense, bc_type='natural')
+        if stamps is None:
+            timing = _speed_profile(s, _bend(curve, s), profile)
+        else:
+            timing = _timed(stamps, vertex_s)
+        start, end = curve(0.0, 1), curve(s[-1], 1)
+        tangent0 = start / max(float(np.hypot(*start)), 1e-300)
+        speed0 = float(timing(timing.x[0], 1))
+        points_out = np.array(xy, dtype=float)
+        points_out.setflags(write=False)
+        if stamps is not None:
+            stamps = np.array(stamps, dtype=float)
+            stamps.setflags(write=False)
+        return cls(points=points_out, stamps=stamps, profile=profile, length=float(s[-1]),
+                   duration=float(timing.x[-1]), _curve=curve, _timing=timing,
+                   _s_breaks=array('d', curve.x), _s_coef=array('d', _rows(curve.c)),
+                   _t_breaks=array('d', timing.x), _t_coef=array('d', _rows(timing.c)),
+                   _start=(float(dense[0, 0]), float(dense[0, 1]), float(tangent0[0]),
+                           float(tangent0[1]), speed0, math.atan2(start[1], start[0])),
+                   _end=(float(dense[-1, 0]), float(dense[-1, 1]),
+                         math.atan2(end[1], end[0])))
+
+    def __repr__(self):
+        timed = 'timed, ' if self.stamps is not None else ''
+        return (f'PathTrajectory({timed}{len(self.points)} points, length {self.length:.3f} m,'
+                f' duration {self.duration:.3f} s)')
+
+    @property
+    def start_pose(self) -> tuple[float, float, float]:
+        """Return (x, y, yaw) at the start [m, m, rad]; yaw is the path's tangent there."""
+        x, y, _, _, _, yaw = self._start
+        return x, y, yaw
+
+    @property
+    def end_pose(self) -> tuple[float, float, float]:
+        """Return (x, y, yaw) at the end [m, m, rad]; yaw is the path's tangent there."""
+        return self._end
+
+    def sample(self, t):
+        """Return the position and velocity (x_d, y_d, xdot_d, ydot_d) at ``t`` [s]."""
+        if isinstance(t, (float, int)):
+            return self._state(float(t))[:4]
+        return self._states(t)[:4]
+
+    def acceleration(self, t):
+        """Return (x_d'', y_d'') at ``t`` [m/s^2]: dv/dt along the tangent plus v^2 kappa."""
+        if isinstance(t, (float, int)):
+            return self._state(float(t))[4:6]
+        return self._states(t)[4:6]
+
+    def heading(self, t):
+        """Return the path's tangent direction at ``t`` [rad], also where the speed is 0."""
+        if isinstance(t, (float, int)):
+            return self._state(float(t))[6]
+        return self._states(t)[6]
+
+    def geometry(self, s):
+        """
+        Return the curve at arc length ``s`` [m], clamped to [0, length].
+
+        Returns
+        -------
+        tuple of ndarray
+            (x, y, yaw, kappa) [m, m, rad, 1/m] shaped as ``s``: the position, the tangent
+            direction and the signed curvature (> 0 turning left), e.g. to publish the
+            rounded path.
+
+        """
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
+        position, first, second = self._curve(s), self._curve(s, 1), self._curve(s, 2)
+        dx, dy = first[..., 0], first[..., 1]
+        norm = np.hypot(dx, dy)
+        kappa = (dx * second[..., 1] - dy * second[..., 0]) / norm ** 3
+        return position[..., 0], position[..., 1], np.arctan2(dy, dx), kappa
+
+    def _state(self, t: float) -> tuple:
+        """Return x, y, xdot, ydot, xddot, yddot, tangent angle at the float ``t``."""
+        t_breaks = self._t_breaks
+        if not t > t_breaks[0]:
+            x, y, tx, ty, v, yaw = self._start
+            if v > 0.0:
+                dt = t - t_breaks[0]
+                return x + v * dt * tx, y + v * dt * ty, v * tx, v * ty, 0.0, 0.0, yaw
+            return x, y, 0.0, 0.0, 0.0, 0.0, yaw
+        if t >= t_breaks[-1]:
+            x, y, yaw = self._end
+            return x, y, 0.0, 0.0, 0.0, 0.0, yaw
+        k = min(bisect_right(t_breaks, t), len(t_breaks) - 1) - 1
+        tau = t - t_breaks[k]
+        c3, c2, c1, c0 = self._t_coef[4 * k:4 * k + 4]
+        s = ((c3 * tau + c2) * tau + c1) * tau + c0
+        sdot = (3.0 * c3 * tau + 2.0 * c2) * tau + c1
+        sddot = 6.0 * c3 * tau + 2.0 * c2
+        s_breaks = self._s_breaks
+        j = min(max(bisect_right(s_breaks, s), 1), len(s_breaks) - 1) - 1
+        u = s - s_breaks[j]
+        a3, a2, a1, a0, b3, b2, b1, b0 = self._s_coef[8 * j:8 * j + 8]
+        dx = (3.0 * a3 * u + 2.0 * a2) * u + a1
+        dy = (3.0 * b3 * u + 2.0 * b2) * u + b1
+        ddx = 6.0 * a3 * u + 2.0 * a2
+        ddy = 6.0 * b3 * u + 2.0 * b2
+        return (((a3 * u + a2) * u + a1) * u + a0, ((b3 * u + b2) * u + b1) * u + b0,
+                dx * sdot, dy * sdot, ddx * sdot * sdot + dx * sddot,
+                ddy * sdot * sdot + dy * sddot, math.atan2(dy, dx))
+
+    def _states(self, t) -> tuple:
+        """Return x, y, xdot, ydot, xddot, yddot, tangent angle as arrays shaped as ``t``."""
+        t = np.asarray(t, dtype=float)
+        t0, t1 = self._t_breaks[0], self._t_breaks[-1]
+        inside = np.clip(t, t0, t1)
+        s = self._timing(inside)
+        sdot, sddot = self._timing(inside, 1), self._timing(inside, 2)
+        position, tangent, second = self._curve(s), self._curve(s, 1), self._curve(s, 2)
+        x, y = position[..., 0], position[..., 1]
+        dx, dy = tangent[..., 0], tangent[..., 1]
+        xdot, ydot = dx * sdot, dy * sdot
+        xddot = second[..., 0] * sdot * sdot + dx * sddot
+        yddot = second[..., 1] * sdot * sdot + dy * sddot
+        yaw = np.arctan2(dy, dx)
+        x0, y0, tx, ty, v, yaw0 = self._start
+        before = ~(t > t0)
+        moved = v * (t - t0) if v > 0.0 else np.zeros_like(t)
+        x1, y1, yaw1 = self._end
+        after = t >= t1
+        out = []
+        for value, early, late in ((x, x0 + moved * tx, x1), (y, y0 + moved * ty, y1),
+                                   (xdot, v * tx, 0.0), (ydot, v * ty, 0.0), (xddot, 0.0, 0.0),
+                                   (yddot, 0.0, 0.0), (yaw, yaw0, yaw1)):
+            out.append(np.where(before, early, np.where(after, late, value)))
+        return tuple(out)
+
+
+# -- the points ---------------------------------------------------------------------------
+
+def _where(index: int, xy) -> str:
+    """Return ``point 7 at (3.00, 1.00) m``."""
+    return f'point {index} at ({xy[0]:.2f}, {xy[1]:.2f}) m'
+
+
+def _checked_points(points):
+    """
+    Return the merged points (M, 2), their stamps (M,) or None, and their input indices.
+
+    Raises
+    ------
+    PathError
+        For an input that is not a list of points, a value that is not a finite number,
+        fewer than 2 distinct points, stamps that do not increase or a cusp.
+
+    """
+    shape_rule = ('must be a list of points: (N, 2) of x, y [m] or (N, 3) of t, x, y '
+                  '[s, m, m]')
+    try:
+        raw = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise PathError(shape_rule) from None
+    if raw.size == 0:
+        raw = raw.reshape(0, 2)
+    if raw.ndim != 2 or raw.shape[1] not in (2, 3):
+        raise PathError(f'{shape_rule}; got shape {raw.shape}', value=raw.shape)
+    timed = raw.shape[1] == 3
+    xy_all = raw[:, 1:] if timed else raw
+    bad = np.flatnonzero(~np.isfinite(raw).all(axis=1))
+    if bad.size:
+        i = int(bad[0])
+        what = 'its stamp and coordinates must be' if timed else 'its coordinates must be'
+        raise PathError(f'{_where(i, xy_all[i])}: {what} finite numbers', i,
+                        tuple(raw[i].tolist()))
+    kept = []
+    for i in range(len(raw)):
+        if not kept or math.dist(xy_all[i], xy_all[kept[-1]]) >= MERGE_DISTANCE:
+            kept.append(i)
+    if len(kept) < 2:
+        raise PathError(f'{len(kept)} distinct point(s) ({len(raw)} given; points closer '
+                        f'than {MERGE_DISTANCE * 1e3:g} mm merge): a path needs at least 2',
+                        value=len(raw))
+    index = np.array(kept)
+    xy = xy_all[index]
+    stamps = None
+    if timed:
+        stamps = raw[index, 0]
+        if stamps[0] < 0.0:
+            i = kept[0]
+            raise PathError(f'{_where(i, xy[0])}: its stamp {stamps[0]:g} s is negative; '
+                            'the reference starts at t = 0', i, tuple(raw[i].tolist()))
+        late = np.flatnonzero(np.diff(stamps) <= 0.0)
+        if late.size:
+            k = int(late[0]) + 1
+            i = kept[k]
+            previous = f"the previous point's {stamps[k - 1]:g} s"
+            raise PathError(f'{_where(i, xy[k])}: its stamp {stamps[k]:g} s does not come '
+                            f'after {previous}; stamps must increase', i,
+                            tuple(raw[i].tolist()))
+    _, _, turn = _segments(xy)
+    cusp = np.flatnonzero(np.abs(turn) > CUSP_ANGLE)
+    if cusp.size:
+        k = int(cusp[0]) + 1
+        i = kept[k]
+        raise PathError(f'{_where(i, xy[k])}: the path turns back on itself (a cusp, a turn '
+                        f'of {math.degrees(abs(turn[k - 1])):.0f} deg > '
+                        f'{math.degrees(CUSP_ANGLE):.0f} deg); reversing is not supported',
+                        i, tuple(xy[k].tolist()))
+    return xy, stamps, index
+
+
+def _segments(xy):
+    """Return the unit directions (M-1, 2), lengths (M-1,) and turns (M-2,) [rad] of ``xy``."""
+    delta = np.diff(xy, axis=0)
+    lengths = np.hypot(delta[:, 0], delta[:, 1])
+    unit = delta / lengths[:, None]
+    cross = unit[:-1, 0] * unit[1:, 1] - unit[:-1, 1] * unit[1:, 0]
+    dot = np.einsum('ij,ij->i', unit[:-1], unit[1:])
+    return unit, lengths, np.arctan2(np.abs(cross), dot) * np.where(cross < 0.0, -1.0, 1.0)
+
+
+# -- the curve ------------------------------------------------------------------------------
+
+def _intervals(length: float, spacing: float) -> int:
+    """Return how many intervals resample ``length`` [m] at about ``spacing`` [m]."""
+    wanted = math.ceil(length / spacing) if spacing > 0.0 else _MAX_INTERVALS
+    return int(min(max(wanted, _MIN_INTERVALS), _MAX_INTERVALS))
+
+
+def _rounded(xy, corner_radius: float):
+    """
+    Return the rounded polyline resampled: parameter u (G1 arc length), samples, vertex u.
+
+    Each interior vertex becomes a circular arc tangent to both segments (see the module
+    docstring for its radius); the resampled curve is smoothed by a Gaussian whose width
+    is :data:`SMOOTHING` of the smallest radius or segment, the arcs enlarged by what that
+    takes.
+    """
+    unit, lengths, signed_turn = _segments(xy)
+    turn = np.abs(signed_turn)
+    half = turn / 2.0
+    rounded = turn > _STRAIGHT_TURN
+    tan_half = np.where(rounded, np.tan(half), 1.0)
+    # Cut of a corner by an arc of radius r: r (1/cos(turn/2) - 1) = r 2 sin^2(turn/4) / cos.
+    cut = np.where(rounded, 2.0 * np.sin(half / 2.0) ** 2 / np.cos(half), 1.0)
+    widest = (math.sqrt(2.0) - 1.0) * corner_radius / cut
+    room = np.minimum(lengths[:-1], lengths[1:]) / 2.0 / tan_half
+    radius = np.where(rounded, np.minimum(np.maximum(corner_radius, widest), room), 0.0)
+    sigma = 0.0
+    if rounded.any():
+        sigma = SMOOTHING * min(float(radius[rounded].min()), float(lengths.min()))
+    polyline = float(lengths.sum())
+    spacing = min(_SPACING, sigma / _SAMPLES_PER_SIGMA) if sigma > 0.0 else _SPACING
+    spacing = max(spacing, polyline / _MAX_INTERVALS)
+    if sigma > 0.0:
+        sigma = max(sigma, _SAMPLES_PER_SIGMA * spacing)
+        with np.errstate(divide='ignore', over='ignore'):
+            enlarge = np.exp(np.minimum(0.5 * (sigma / np.where(rounded, radius, 1.0)) ** 2,
+                                        10.0))
+        radius = np.where(rounded, np.minimum(radius * np.minimum(enlarge, _MAX_ENLARGEMENT),
+                                              room), 0.0)
+    tangent = radius * np.where(rounded, tan_half, 0.0)
+    cut_in = np.r_[0.0, tangent, 0.0]
+    # Primitives in order: line 0, arc 1, line 1, ..., arc M-2, line M-2.
+    line_start = xy[:-1] + unit * cut_in[:-1, None]
+    line_length = np.maximum(lengths - cut_in[:-1] - cut_in[1:], 0.0)
+    arc_start = xy[1:-1] - unit[:-1] * tangent[:, None]
+    arc_length = radius * turn
+    count = 2 * len(lengths) - 1
+    start = np.empty((count, 2))
+    direction = np.empty((count, 2))
+    normal = np.zeros((count, 2))
+    radii = np.ones(count)
+    is_arc = np.zeros(count, dtype=bool)
+    size = np.empty(count)
+    start[0::2], direction[0::2], size[0::2] = line_start, unit, line_length
+    start[1::2], direction[1::2], size[1::2] = arc_start, unit[:-1], arc_length
+    side = np.where(signed_turn < 0.0, -1.0, 1.0)
+    normal[1::2] = np.c_[-unit[:-1, 1], unit[:-1, 0]] * side[:, None]
+    radii[1::2] = np.where(rounded, radius, 1.0)
+    is_arc[1::2] = rounded
+    begin = np.r_[0.0, np.cumsum(size)]
+    total = float(begin[-1])
+    vertex_u = np.r_[0.0, begin[1:-1:2] + arc_length / 2.0, total]
+    u = np.linspace(0.0, total, _intervals(total, spacing) + 1)
+    which = np.clip(np.searchsorted(begin, u, side='right') - 1, 0, count - 1)
+    along = np.minimum(u - begin[which], size[which])
+    angle = along / radii[which]
+    forward = np.where(is_arc[which], radii[which] * np.sin(angle), along)
+    sideways = np.where(is_arc[which], 2.0 * radii[which] * np.sin(angle / 2.0) ** 2, 0.0)
+    dense = (start[which] + forward[:, None] * direction[which]
+             + sideways[:, None] * normal[which])
+    if sigma > 0.0:
+        dense = _smoothed(u, dense, sigma, unit[0], unit[-1], xy[0], xy[-1])
+    return u, dense, vertex_u
+
+
+def _smoothed(u, dense, sigma: float, first, last, start, end):
+    """
+    Return ``dense`` convolved with a Gaussian of width ``sigma`` [m] along the even ``u``.
+
+    The ends are extended along the first and last directions (so straight ends stay
+    straight) and pinned back onto ``start`` and ``end`` by a correction linear in u.
+    """
+    h = float(u[1] - u[0])
+    pad = int(math.ceil(_TRUNCATE * sigma / h)) + 1
+    before = start + np.outer(np.arange(-pad, 0) * h, first)
+    after = end + np.outer(np.arange(1, pad + 1) * h, last)
+    padded = np.vstack([before, dense, after])
+    smooth = gaussian_filter1d(padded, sigma / h, axis=0, mode='nearest',
+                               truncate=_TRUNCATE)
+    smooth = smooth[pad:pad + len(u)]
+    weight = ((u - u[0]) / (u[-1] - u[0]))[:, None]
+    return smooth + (1.0 - weight) * (start - smooth[0]) + weight * (end - smooth[-1])
+
+
+def _through_points(xy):
+    """Return the C2 spline through the points resampled: parameter u, samples, vertex u."""
+    chord = np.r_[0.0, np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]
+    spline = CubicSpline(chord, xy, bc_type='natural')
+    u = np.unique(np.r_[np.linspace(0.0, chord[-1],
+                                    _intervals(chord[-1], _SPACING) + 1), chord])
+    dense = spline(u)
+    dense[0], dense[-1] = xy[0], xy[-1]
+    return u, dense, chord
+
+
+def _by_arc_length(u, dense, vertex_u):
+    """
+    Return arc length s of the samples, the samples and s at the vertices.
+
+    s is the summed chord of the dense samples (the arc length to within a few parts in a
+    million); samples closer than a nanometre to the one before are dropped, so that s
+    increases strictly.
+    """
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(dense, axis=0).T))]
+    keep = np.r_[True, np.diff(s) > 1e-9]
+    if not keep[-1]:
+        keep[np.flatnonzero(keep)[-1]] = False
+        keep[-1] = True
+    vertex_s = np.interp(vertex_u, u[keep], s[keep])
+    return s[keep], dense[keep], vertex_s
+
+
+def _arc_length(curve) -> np.ndarray:
+    """Return the arc length of ``curve`` at its breakpoints (5-point Gauss-Legendre) [m]."""
+    nodes, weights = np.polynomial.legendre.leggauss(5)
+    start, width = curve.x[:-1], np.diff(curve.x)
+    at = start[:, None] + width[:, None] * (nodes + 1.0) / 2.0
+    tangent = curve(at, 1)
+    speed = np.hypot(tangent[..., 0], tangent[..., 1])
+    return np.r_[0.0, np.cumsum(speed @ weights * width / 2.0)]
+
+
+def _bend(curve, s):
+    """
+    Return the largest |curvature| [1/m] at each sample ``s`` and halfway to its neighbours.
+
+    The speed limit of a sample then holds, very nearly, on the intervals beside it too,
+    where the speed varies linearly in v^2 while the curvature may change fast.
+    """
+    middle = (s[:-1] + s[1:]) / 2.0
+    at = np.abs(_curvature(curve, s))
+    between = np.abs(_curvature(curve, middle))
+    at[:-1] = np.maximum(at[:-1], between)
+    at[1:] = np.maximum(at[1:], between)
+    return at
+
+
+def _curvature(curve, s):
+    """Return the signed curvature kappa(s) [1/m] of ``curve``, bounded for the profile."""
+    first, second = curve(s, 1), curve(s, 2)
+    norm = np.maximum(np.hypot(first[:, 0], first[:, 1]), 1e-9)
+    kappa = (first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]) / norm ** 3
+    return np.clip(np.nan_to_num(kappa), -_MAX_CURVATURE, _MAX_CURVATURE)
+
+
+def _rows(coefficients) -> np.ndarray:
+    """Return PPoly coefficients (4, n[, 2]) as rows of each interval, flattened."""
+    c = np.asarray(coefficients, dtype=float)
+    if c.ndim == 3:
+        c = c.transpose(1, 2, 0)
+    else:
+        c = c.T
+    return np.ascontiguousarray(c).ravel()
+
+
+# -- the timing -----------------------------------------------------------------------------
+
+def _speed_profile(s, bend, profile: PathProfile) -> PPoly:
+    """
+    Return s(t) for the speed limits of ``profile`` along the samples ``s``, |kappa| ``bend``.
+
+    v^2 is limited at each sample by the cruise speed, lateral acceleration and yaw rate,
+    then by a forward pass (acceleration, from the start speed) and a backward pass
+    (deceleration, to rest at the end); both passes are running minima of v^2 +- 2 a s.
+    """
+    with np.errstate(divide='ignore', over='ignore'):
+        limit = np.minimum(profile.lateral_acceleration / bend,
+                           (profile.omega_max / bend) ** 2)
+    limit = np.minimum(limit, profile.speed ** 2)
+    limit[0] = min(profile.start_speed ** 2, limit[0])
+    ramp = 2.0 * profile.acceleration * s
+    squared = ramp + np.minimum.accumulate(limit - ramp)
+    squared[-1] = 0.0
+    ramp = 2.0 * profile.deceleration * (s[-1] - s)
+    squared = ramp + np.minimum.accumulate((squared - ramp)[::-1])[::-1]
+    v = np.sqrt(np.maximum(squared, 0.0))
+    v[-1] = 0.0
+    ds = np.diff(s)
+    dt = 2.0 * ds / np.maximum(v[:-1] + v[1:], _MIN_SPEED_SUM)
+    a = (v[1:] - v[:-1]) / dt
+    coefficients = np.vstack([np.zeros_like(a), a / 2.0, v[:-1], s[:-1]])
+    return PPoly(coefficients, np.r_[0.0, np.cumsum(dt)], extrapolate=True)
+
+
+def _timed(stamps, vertex_s) -> PPoly:
+    """Return the monotone s(t) through (stamps, vertex_s), at rest at both ends."""
+    if len(stamps) > 2:
+        slopes = PchipInterpolator(stamps, vertex_s).derivative()(stamps)
+    else:
+        slopes = np.zeros(len(stamps))
+    slopes[0] = slopes[-1] = 0.0
+    return CubicHermiteSpline(stamps, vertex_s, slopes)

@@ -1,0 +1,212 @@
+"""Path files: CSV and YAML points, every error naming the file, line and column."""
+
+import math
+from pathlib import Path
+import pickle
+
+from nfmr_dlsmc.core.errors import NfmrError
+from nfmr_dlsmc.core.path_reference import PathProfile, PathTrajectory
+from nfmr_dlsmc.runtime.path_files import load_path, load_path_trajectory, PathFileError
+from nfmr_dlsmc.runtime.user_errors import report_user_error, USER_ERROR_STATUS
+import numpy as np
+import pytest
+
+PATHS = Path(__file__).resolve().parents[1] / 'config' / 'paths'
+
+
+def _write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+# -- reading --------------------------------------------------------------------------------
+
+def test_a_csv_path_with_comments_blank_lines_and_spaces(tmp_path):
+    path = _write(tmp_path, 'aisle.csv', '# an aisle and back\n'
+                                         '\n'
+                                         '  x , y  \n'
+                                         '0, 0\n'
+                                         '  # a station\n'
+                                         '2.5 ,0.0   # inline comment\n'
+                                         '\n'
+                                         '2.5, 1e0\n')
+    points = load_path(path)
+    np.testing.assert_array_equal(points, [[0.0, 0.0], [2.5, 0.0], [2.5, 1.0]])
+    assert points.dtype == float
+
+
+@pytest.mark.parametrize('header, row', [('t,x,y', '1.5,2,3'), ('x,y,t', '2,3,1.5'),
+                                         ('Y, T, X', '3,1.5,2')])
+def test_the_header_decides_the_columns_and_a_t_column_makes_a_timed_path(tmp_path, header,
+                                                                          row):
+    path = _write(tmp_path, 'timed.csv', f'{header}\n0,0,0\n{row}\n')
+    points = load_path(path)
+    assert points.shape == (2, 3)
+    np.testing.assert_array_equal(points[1], [1.5, 2.0, 3.0])  # always t, x, y
+
+
+def test_columns_in_another_order_come_back_as_x_y(tmp_path):
+    points = load_path(_write(tmp_path, 'p.txt', 'y,x\n1,2\n3,4\n'))
+    np.testing.assert_array_equal(points, [[2.0, 1.0], [4.0, 3.0]])
+
+
+@pytest.mark.parametrize('name, text, expected', [
+    ('list.yaml', '# x, y [m]\n- [0, 0]\n- [2.5, 0]\n- [2.5, 1]\n',
+     [[0.0, 0.0], [2.5, 0.0], [2.5, 1.0]]),
+    ('flow.yml', '[[0, 0], [1.5, -2e-1]]\n', [[0.0, 0.0], [1.5, -0.2]]),
+    ('mapping.yaml', 'points:\n  - [0.0, 0.0]\n  - [3, 4]\n', [[0.0, 0.0], [3.0, 4.0]]),
+    ('timed.YAML', 'points: [[0, 0, 0], [2.0, 1, 1]]\n', [[0.0, 0.0, 0.0], [2.0, 1.0, 1.0]]),
+])
+def test_a_yaml_path(tmp_path, name, text, expected):
+    np.testing.assert_array_equal(load_path(_write(tmp_path, name, text)), expected)
+
+
+# -- errors ---------------------------------------------------------------------------------
+
+CSV_ERRORS = [
+    ('', None, None, 'empty: no header and no points'),
+    ('# only a comment\n\n', None, None, 'empty: no header and no points'),
+    ('x,y\n# nothing\n', None, None, 'no points after the header (line 1)'),
+    ('0,0\n1,1\n', 1, None, "no header: the header names the columns: 'x,y' [m] or 't,x,y'"),
+    ('x,z\n0,0\n', 1, None, "unknown column 'z'"),
+    ('# x and t only\nt,x\n0,0\n', 2, None, 'no column y'),
+    ('x,y,x\n0,0,0\n', 1, None, 'column x is named twice'),
+    ('x,y\n0,0\n1,1\n2,2\nabc,3\n', 5, 'x', "'abc' is not a number"),
+    ('# header next\nx,y\n0,0\n1,1,1\n', 4, None,
+     '3 fields, but the header (line 2) names 2: x,y'),
+    ('x,y\n0,0\n1\n', 3, None, '1 fields, but the header (line 1) names 2'),
+    ('x,y\n0,0\n1,\n', 3, 'y', "'' is not a number"),
+    ('t,x,y\n0,0,0\nnan,1,1\n', 3, 't', "'nan' is not a finite number"),
+    ('x,y\n0,0\n1,-inf\n', 3, 'y', "'-inf' is not a finite number"),
+]
+
+
+@pytest.mark.parametrize('text, line, column, message', CSV_ERRORS)
+def test_a_bad_csv_file_is_refused_naming_the_line_and_column(tmp_path, text, line, column,
+                                                              message):
+    path = _write(tmp_path, 'warehouse.csv', text)
+    with pytest.raises(PathFileError) as caught:
+        load_path(path)
+    where = f'{path}' + (f' line {line}' if line else '') + (f', column {column}' if column
+                                                             else '')
+    assert str(caught.value).startswith(f'{where}: {message}')
+    error = caught.value
+    assert (error.file, error.line, error.column) == (str(path), line, column)
+
+
+def test_text_in_a_number_reads_as_the_brief_says(tmp_path):
+    _write(tmp_path, 'warehouse.csv', 'x,y\n0,0\n1,0\n2,0\n3,abc\n')
+    with pytest.raises(PathFileError) as caught:
+        load_path(tmp_path / 'warehouse.csv')
+    assert str(caught.value) == f"{tmp_path}/warehouse.csv line 5, column y: 'abc' is not a number"
+
+
+YAML_ERRORS = [
+    ('', None, None, 'empty: expected a list of points [x, y] or [t, x, y]'),
+    ('- [0, 0]\n- [1, 1\n', 3, None, 'YAML syntax error'),
+    ('frame: map\npoints: [[0, 0], [1, 1]]\n', 1, None, "unknown key 'frame'"),
+    ('{}\n', 1, None, 'no key points'),
+    ("- [0, 0]\n- [1, '2']\n", 2, 'y', "'2' is not a number"),
+    ('points: 3\n', 1, None, 'expected a list of points'),
+    ('- [0, 0]\n- [1, abc]\n', 2, 'y', "'abc' is not a number"),
+    ('- [0, 0]\n- [true, 1]\n', 2, 'x', "'true' is not a number"),
+    ('- [0, 0]\n- [.nan, 1]\n', 2, 'x', "'.nan' is not a finite number"),
+    ('- [0, 0]\n- [1, [2]]\n', 2, 'y', 'expected a number, found a list or mapping'),
+    ('- [0, 0]\n- [0, 1, 1]\n', 2, None, '3 numbers, but the first point (line 1) has 2: '
+                                         '[x, y]'),
+    ('- [0, 0, 0, 0]\n', 1, None, 'a point is a list [x, y] or [t, x, y]'),
+    ('- 1\n- 2\n', 1, None, 'a point is a list [x, y] or [t, x, y]'),
+]
+
+
+@pytest.mark.parametrize('text, line, column, message', YAML_ERRORS)
+def test_a_bad_yaml_file_is_refused_naming_the_line_and_column(tmp_path, text, line, column,
+                                                               message):
+    path = _write(tmp_path, 'route.yaml', text)
+    with pytest.raises(PathFileError) as caught:
+        load_path(path)
+    where = f'{path}' + (f' line {line}' if line else '') + (f', column {column}' if column
+                                                             else '')
+    assert str(caught.value).startswith(f'{where}: {message}')
+
+
+def test_a_missing_file_or_a_folder_is_refused_naming_it(tmp_path):
+    with pytest.raises(PathFileError, match=f'^{tmp_path}/missing.csv: no such file$'):
+        load_path(tmp_path / 'missing.csv')
+    with pytest.raises(PathFileError, match=f'^{tmp_path}: is a directory'):
+        load_path(tmp_path)
+    (tmp_path / 'binary.csv').write_bytes(b'x,y\n\xff\xfe\n')
+    with pytest.raises(PathFileError, match='not a text file'):
+        load_path(tmp_path / 'binary.csv')
+
+
+def test_a_path_file_error_is_a_user_error_of_one_line(tmp_path, capsys):
+    path = _write(tmp_path, 'warehouse.csv', 'x,y\n0,zero\n')
+    with pytest.raises(NfmrError) as caught:
+        load_path(path)
+    assert isinstance(caught.value, ValueError)
+    assert report_user_error('nfmr-run', caught.value) == USER_ERROR_STATUS
+    assert capsys.readouterr().err == (f"nfmr-run: error: {path} line 2, column y: 'zero' is "
+                                       'not a number\n')
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert str(again) == str(caught.value) and again.line == 2 and again.column == 'y'
+
+
+def test_points_that_make_no_path_are_refused_naming_their_line(tmp_path):
+    path = _write(tmp_path, 'cusp.csv', 'x,y\n0,0\n# back again\n3,0\n3,0.0005\n1,0\n')
+    with pytest.raises(PathFileError) as caught:
+        load_path_trajectory(path)
+    assert str(caught.value) == (f'{path} line 4: point 1 at (3.00, 0.00) m: the path turns '
+                                 'back on itself (a cusp, a turn of 180 deg > 170 deg); '
+                                 'reversing is not supported')
+    path = _write(tmp_path, 'late.yaml', '- [0, 0, 0]\n- [1, 1, 0]\n- [1, 2, 0]\n')
+    with pytest.raises(PathFileError, match=r'late.yaml line 3: point 2 .* stamps must'):
+        load_path_trajectory(path)
+    path = _write(tmp_path, 'one.csv', 'x,y\n1,1\n1,1\n')
+    with pytest.raises(PathFileError, match=r'one.csv: 1 distinct point\(s\) \(2 given'):
+        load_path_trajectory(path)
+
+
+def test_a_path_file_gives_its_trajectory(tmp_path):
+    path = _write(tmp_path, 'l.csv', 'x,y\n0,0\n4,0\n4,3\n')
+    profile = PathProfile(speed=0.8, corner_radius=0.5)
+    traj = load_path_trajectory(path, profile)
+    assert traj.profile is profile
+    np.testing.assert_array_equal(traj.points, [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
+    assert traj.end_pose == pytest.approx((4.0, 3.0, math.pi / 2.0))
+
+
+# -- the shipped examples -------------------------------------------------------------------
+
+def _smallest_radius(traj: PathTrajectory) -> float:
+    _, _, _, kappa = traj.geometry(np.linspace(0.0, traj.length, 400001))
+    return 1.0 / np.abs(kappa).max()
+
+
+def test_the_warehouse_loop():
+    points = load_path(PATHS / 'warehouse_loop.csv')
+    assert points.shape[1] == 2
+    traj = PathTrajectory.from_points(points)
+    assert traj.length == pytest.approx(25.0, abs=1.0)
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)  # at (0, 0) heading +x
+    x, y, _ = traj.end_pose
+    assert 0.5 <= math.hypot(x, y) <= 1.5  # stops short of the start, on the last aisle
+    # Straight aisles and 90 deg corners rounded with the default corner radius.
+    turns = np.degrees(np.abs(np.diff(np.unwrap(np.arctan2(*np.diff(points, axis=0).T[::-1])))))
+    assert sorted(set(np.round(turns))) == [0.0, 90.0]
+    assert _smallest_radius(traj) >= PathProfile().corner_radius * (1.0 - 1e-3)
+
+
+def test_the_field_coverage():
+    text = (PATHS / 'field_coverage.csv').read_text()
+    assert text.startswith('#')
+    points = load_path(PATHS / 'field_coverage.csv')
+    traj = PathTrajectory.from_points(points)
+    assert traj.length == pytest.approx(40.0, abs=2.0)
+    assert _smallest_radius(traj) >= 1.0
+    # Rows along x, 2 m apart, driven in turn in both directions.
+    rows = sorted({round(y, 6) for x, y in points if abs(x) < 1e-9 or abs(x - 8.0) < 1e-9})
+    assert rows == [0.0, 2.0, 4.0]
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)
+    assert traj.end_pose == pytest.approx((8.0, 4.0, 0.0), abs=1e-9)

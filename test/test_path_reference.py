@@ -1,0 +1,461 @@
+"""A path given as points: rounding, arc length, speed profile, timing, refusals."""
+
+from dataclasses import FrozenInstanceError
+import math
+import pickle
+import timeit
+
+from hypothesis import given, HealthCheck, settings
+from hypothesis import strategies as st
+from nfmr_dlsmc.core.path_reference import (
+    MERGE_DISTANCE,
+    PathError,
+    PathProfile,
+    PathTrajectory,
+)
+from nfmr_dlsmc.core.schema import params_of
+from nfmr_dlsmc.core.validation import ParameterError
+import numpy as np
+import pytest
+
+#: A loop of aisles with stations along them, as config/paths/warehouse_loop.csv.
+AISLES = np.array([(0.0, 0.0), (2.5, 0.0), (5.0, 0.0), (8.5, 0.0), (8.5, 2.0), (8.5, 4.5),
+                   (6.0, 4.5), (3.0, 4.5), (0.0, 4.5), (0.0, 2.5), (0.0, 1.0)])
+#: Corners of every sharpness, left and right, and segments shorter than the corner radius.
+ZIGZAG = np.array([(0.0, 0.0), (2.0, 0.0), (2.5, 1.0), (4.0, 1.2), (4.2, 3.0), (1.0, 3.5),
+                   (1.2, 3.7), (-1.0, 4.5)])
+#: Points every 10 deg along a circle of radius 2 m (given as points, not corners).
+CIRCLE = np.array([(2.0 * math.sin(a), 2.0 - 2.0 * math.cos(a))
+                   for a in np.radians(np.arange(0.0, 181.0, 10.0))])
+#: Timed: t, x, y [s, m, m].
+TIMED = np.array([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (3.5, 2.0, 0.5), (6.0, 3.0, 1.5),
+                  (9.0, 3.5, 3.0)])
+
+CASES = {
+    'aisles': (AISLES, PathProfile()),
+    'aisles started': (AISLES, PathProfile(start_speed=0.3)),
+    'zigzag, yaw rate bound': (ZIGZAG, PathProfile(speed=1.0, lateral_acceleration=2.0,
+                                                   omega_max=0.5, corner_radius=0.5)),
+    'zigzag, lateral bound': (ZIGZAG, PathProfile(speed=1.5, lateral_acceleration=0.2,
+                                                  omega_max=5.0, acceleration=0.8,
+                                                  deceleration=0.5)),
+    'circle': (CIRCLE, PathProfile(speed=1.0)),
+    'spline only': (ZIGZAG[:4], PathProfile(corner_radius=0.0)),
+    'timed': (TIMED, PathProfile()),
+}
+
+
+def _build(name):
+    points, profile = CASES[name]
+    return PathTrajectory.from_points(points, profile)
+
+
+def _times(traj, count=1777):
+    # Spread over [-1, duration + 1], off the round numbers where the profile has corners.
+    return np.linspace(-1.0, traj.duration + 1.0, count) + 0.0123
+
+
+def _dense(traj, count=200001):
+    s = np.linspace(0.0, traj.length, count)
+    return s, traj.geometry(s)
+
+
+def _cut(turn, radius):
+    """Return how far an arc of ``radius`` tangent to both legs passes from the corner."""
+    return radius * (1.0 / math.cos(turn / 2.0) - 1.0)
+
+
+def _turns(points):
+    delta = np.diff(points, axis=0)
+    heading = np.arctan2(delta[:, 1], delta[:, 0])
+    return np.abs((np.diff(heading) + math.pi) % (2.0 * math.pi) - math.pi)
+
+
+# -- the profile ----------------------------------------------------------------------------
+
+def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
+    declared = {p.name: p for p in params_of(PathProfile)}
+    assert list(declared) == [f'trajectory.path.{n}' for n in (
+        'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
+        'corner_radius', 'start_speed')]
+    assert [declared[f'trajectory.path.{n}'].default for n in (
+        'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
+        'corner_radius', 'start_speed')] == [0.5, 0.5, 1.0, 0.3, 0.3, 0.3, 0.0]
+    assert declared['trajectory.path.lateral_acceleration'].unit == 'm/s^2'
+    assert declared['trajectory.path.corner_radius'].rule_text == '>= 0'
+    assert 'trajectory.path.speed' in (PathProfile.__doc__ or '')
+
+
+@pytest.mark.parametrize('kwargs, message', [
+    ({'speed': -1.0}, 'trajectory.path.speed = -1.0 m/s: must be > 0'),
+    ({'lateral_acceleration': 0.0}, 'trajectory.path.lateral_acceleration = 0.0 m/s^2: must'),
+    ({'omega_max': math.inf}, 'trajectory.path.omega_max = inf rad/s: must be a finite'),
+    ({'acceleration': 'fast'}, "trajectory.path.acceleration = 'fast' m/s^2: must be a real"),
+    ({'deceleration': -0.3}, 'trajectory.path.deceleration = -0.3 m/s^2: must be > 0'),
+    ({'corner_radius': -0.1}, 'trajectory.path.corner_radius = -0.1 m: must be >= 0'),
+    ({'start_speed': 0.6}, 'trajectory.path.start_speed = 0.6 m/s: must be <= '
+                           'trajectory.path.speed = 0.5 m/s'),
+])
+def test_the_profile_refuses_a_bad_value_naming_it(kwargs, message):
+    with pytest.raises(ParameterError) as caught:
+        PathProfile(**kwargs)
+    assert str(caught.value).startswith(message)
+
+
+# -- the curve ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize('points, radius', [(AISLES, 0.3), (ZIGZAG, 0.3), (ZIGZAG, 0.5),
+                                            (ZIGZAG, 1.0), (CIRCLE, 0.3)])
+def test_the_reference_passes_every_point_within_its_corner_rounding(points, radius):
+    traj = PathTrajectory.from_points(points, PathProfile(corner_radius=radius))
+    _, (x, y, _, _) = _dense(traj)
+    distance = np.array([np.hypot(x - px, y - py).min() for px, py in points])
+    # A corner is cut by an arc of corner_radius, or of a larger radius that cuts no more
+    # than a right angle of corner_radius is cut; a short leg makes the arc smaller.
+    allowed = [max(_cut(turn, radius), _cut(math.pi / 2.0, radius)) for turn in _turns(points)]
+    assert distance[0] < 1e-9 and distance[-1] < 1e-9
+    assert np.all(distance[1:-1] <= 1.02 * np.array(allowed) + 1e-3)
+    assert traj.geometry(0.0)[0] == pytest.approx(points[0, 0], abs=1e-12)
+    assert traj.geometry(traj.length)[1] == pytest.approx(points[-1, 1], abs=1e-12)
+
+
+def test_without_corner_radius_the_spline_goes_through_the_points_themselves():
+    traj = PathTrajectory.from_points(ZIGZAG, PathProfile(corner_radius=0.0))
+    _, (x, y, _, _) = _dense(traj)
+    for px, py in ZIGZAG:
+        assert np.hypot(x - px, y - py).min() < 1e-4
+
+
+def test_points_along_a_circle_keep_its_radius():
+    traj = PathTrajectory.from_points(CIRCLE)
+    _, (_, _, _, kappa) = _dense(traj)
+    inner = kappa[len(kappa) // 10:-len(kappa) // 10]
+    assert np.all(np.abs(inner - 0.5) < 0.01)  # 1 / 2 m, the polygon's own inscribed arcs
+
+
+@pytest.mark.parametrize('name', ['aisles', 'zigzag, yaw rate bound', 'spline only', 'timed'])
+def test_the_curve_is_parameterised_by_arc_length(name):
+    traj = _build(name)
+    s, (x, y, yaw, kappa) = _dense(traj, 40001)
+    h = 1e-4
+    inner = s[(s > h) & (s < traj.length - h)]
+    xp, yp, yawp, _ = traj.geometry(inner + h)
+    xm, ym, yawm, _ = traj.geometry(inner - h)
+    speed = np.hypot(xp - xm, yp - ym) / (2.0 * h)
+    np.testing.assert_allclose(speed, 1.0, atol=1e-3)
+    # The tangent and the curvature are those of the positions.
+    direction = np.arctan2(yp - ym, xp - xm)
+    _, _, yaw_in, kappa_in = traj.geometry(inner)
+    assert np.abs(np.angle(np.exp(1j * (direction - yaw_in)))).max() < 1e-5
+    turn_rate = np.angle(np.exp(1j * (yawp - yawm))) / (2.0 * h)
+    np.testing.assert_allclose(turn_rate, kappa_in, atol=1e-3 * max(1.0, np.abs(kappa).max()))
+
+
+@pytest.mark.parametrize('radius', [0.2, 0.3, 0.5, 1.0])
+def test_the_corner_of_an_l_is_rounded_with_the_corner_radius(radius):
+    traj = PathTrajectory.from_points([(0.0, 0.0), (5.0, 0.0), (5.0, 5.0)],
+                                      PathProfile(corner_radius=radius))
+    s, (x, y, yaw, kappa) = _dense(traj)
+    assert np.abs(kappa).max() <= 1.0 / (0.9 * radius)
+    assert np.abs(kappa).max() >= 0.99 / radius  # rounded with that radius, not wider
+    assert np.all(kappa >= -1e-6)  # a left turn, no wiggle
+    gap = np.hypot(x - 5.0, y)
+    assert gap.min() == pytest.approx(radius * (math.sqrt(2.0) - 1.0), rel=0.05)
+    assert gap.min() <= radius
+    # Straight away from the corner, on the given legs.
+    far = gap > 2.0 * radius
+    assert np.abs(kappa[far]).max() < 1e-6
+    assert np.all((np.abs(y[far]) < 1e-9) | (np.abs(x[far] - 5.0) < 1e-9))
+    assert traj.length == pytest.approx(10.0 - (2.0 - math.pi / 2.0) * radius, abs=0.02 * radius)
+
+
+def test_poses_at_both_ends_are_the_end_points_with_the_tangent():
+    traj = _build('aisles')
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)
+    assert traj.end_pose == pytest.approx((0.0, 1.0, -math.pi / 2.0), abs=1e-9)
+    np.testing.assert_array_equal(traj.points, AISLES)
+
+
+# -- merging and refusals -------------------------------------------------------------------
+
+def test_points_closer_than_a_millimetre_merge_into_the_first():
+    half = MERGE_DISTANCE / 2.0
+    given = [(0.0, 0.0), (0.0, 0.0), (half, 0.0), (3.0, 0.0), (3.0, half), (3.0, 2.0),
+             (3.0, 2.0), (3.0, 2.0 + 0.9 * MERGE_DISTANCE)]
+    merged = PathTrajectory.from_points(given)
+    plain = PathTrajectory.from_points([(0.0, 0.0), (3.0, 0.0), (3.0, 2.0)])
+    np.testing.assert_array_equal(merged.points, [(0.0, 0.0), (3.0, 0.0), (3.0, 2.0)])
+    t = _times(plain, 101)
+    np.testing.assert_allclose(merged.sample(t), plain.sample(t), atol=1e-12)
+    # A millimetre apart they stay two points.
+    kept = PathTrajectory.from_points([(0.0, 0.0), (1.0, 0.0), (1.0 + 1.5e-3, 0.0)])
+    assert len(kept.points) == 3
+
+
+@pytest.mark.parametrize('points, index, message', [
+    ([], None, '0 distinct point(s) (0 given'),
+    ([(1.0, 2.0)], None, '1 distinct point(s) (1 given'),
+    ([(1.0, 2.0), (1.0004, 2.0), (1.0, 2.0009)], None,
+     '1 distinct point(s) (3 given; points closer than 1 mm merge)'),
+    ([(0.0, 0.0), (1.0, 0.0), (math.nan, 1.0)], 2, 'point 2 at (nan, 1.00) m: its '
+                                                   'coordinates must be finite numbers'),
+    ([(0.0, 0.0), (1.0, math.inf)], 1, 'point 1 at (1.00, inf) m'),
+    ([(0.0, 0.0), (1.0, 0.0), (3.0, 1.0), (3.0, 4.0), (3.0, 1.0), (5.0, 1.0)], 3,
+     'point 3 at (3.00, 4.00) m: the path turns back on itself (a cusp, a turn of 180 deg '
+     '> 170 deg); reversing is not supported'),
+    ([(0.0, 0.0), (1.0, 0.0), (0.0, 0.1)], 1, 'point 1 at (1.00, 0.00) m: the path turns '
+                                              'back on itself'),
+    ([(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (1.0, 2.0, 0.0), (3.0, 3.0, 0.0)], 2,
+     "point 2 at (2.00, 0.00) m: its stamp 1 s does not come after the previous point's "
+     '1 s; stamps must increase'),
+    ([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (1.5, 2.0, 0.0)], 2, 'point 2 at (2.00, 0.00) m'),
+    ([(-1.0, 0.0, 0.0), (2.0, 1.0, 0.0)], 0, 'point 0 at (0.00, 0.00) m: its stamp -1 s is '
+                                             'negative'),
+    ([(math.nan, 0.0, 0.0), (2.0, 1.0, 0.0)], 0, 'its stamp and coordinates must be finite'),
+    ([1.0, 2.0, 3.0], None, 'must be a list of points: (N, 2) of x, y [m] or (N, 3) of t, x, '
+                            'y [s, m, m]; got shape (3,)'),
+    ([(1.0, 2.0, 3.0, 4.0)] * 3, None, 'got shape (3, 4)'),
+    ([(0.0, 0.0), (1.0,)], None, 'must be a list of points'),
+    ([('a', 'b'), (1.0, 1.0)], None, 'must be a list of points'),
+])
+def test_a_path_that_cannot_be_followed_is_refused_naming_the_point(points, index, message):
+    with pytest.raises(ParameterError) as caught:
+        PathTrajectory.from_points(points)
+    assert isinstance(caught.value, PathError)
+    assert caught.value.parameter == 'trajectory.path'
+    assert caught.value.index == index
+    assert str(caught.value).startswith('trajectory.path: ')
+    assert message in str(caught.value)
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert str(again) == str(caught.value) and again.index == index
+
+
+def test_a_sharp_turn_short_of_a_cusp_is_followed():
+    turn = math.radians(165.0)
+    traj = PathTrajectory.from_points([(0.0, 0.0), (3.0, 0.0),
+                                       (3.0 + 3.0 * math.cos(turn), 3.0 * math.sin(turn))])
+    # The arc may take half of each leg: its radius is what fits, less than 0.3 m.
+    assert np.isfinite(traj.duration) and 3.0 < traj.length < 6.0
+    _, (_, _, _, kappa) = _dense(traj)
+    assert 1.0 / 0.3 < kappa.max() < 1.0 / 0.15
+
+
+def test_the_profile_must_be_a_path_profile():
+    with pytest.raises(TypeError, match='profile must be a PathProfile'):
+        PathTrajectory.from_points(AISLES, {'speed': 1.0})
+
+
+# -- the timing -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize('name', list(CASES))
+def test_velocity_and_acceleration_are_the_derivatives_of_the_position(name):
+    traj = _build(name)
+    t = _times(traj)
+    h = 1e-5
+    x, y, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    plus, minus = traj.sample(t + h), traj.sample(t - h)
+    np.testing.assert_allclose(xdot, (plus[0] - minus[0]) / (2.0 * h), atol=1e-6)
+    np.testing.assert_allclose(ydot, (plus[1] - minus[1]) / (2.0 * h), atol=1e-6)
+    # The central difference is the mean acceleration over [t - h, t + h]: it may differ from
+    # the acceleration at t by as much as that changes over the interval, which is 2 h jerk
+    # where it is continuous and more only at the few steps of the speed profile.
+    after, before = traj.acceleration(t + h), traj.acceleration(t - h)
+    for k, got in ((2, xddot), (3, yddot)):
+        change = np.abs(after[k - 2] - before[k - 2])
+        assert np.mean(change > 1e-4) < 0.02
+        assert np.all(np.abs(got - (plus[k] - minus[k]) / (2.0 * h)) <= 1e-6 + change)
+
+
+@pytest.mark.parametrize('name', [n for n in CASES if n != 'timed'])
+def test_the_speed_respects_every_limit_of_the_profile(name):
+    traj = _build(name)
+    profile = CASES[name][1]
+    t = _times(traj, 20001)
+    _, _, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    v = np.hypot(xdot, ydot)
+    moving = v > 1e-3
+    along = (xdot * xddot + ydot * yddot)[moving] / v[moving]  # dv/dt [m/s^2]
+    across = np.abs(xdot * yddot - ydot * xddot)[moving] / v[moving]  # v^2 kappa [m/s^2]
+    assert v.max() <= profile.speed * (1.0 + 1e-6)
+    assert across.max() <= profile.lateral_acceleration * 1.01
+    assert (across / v[moving]).max() <= profile.omega_max * 1.01  # v kappa [rad/s]
+    assert along.max() <= profile.acceleration * 1.02
+    assert along.min() >= -profile.deceleration * 1.02
+    # Each limit binds somewhere, or it was not tested.
+    bound = {'speed': v.max() / profile.speed,
+             'lateral': across.max() / profile.lateral_acceleration,
+             'yaw rate': (across / v[moving]).max() / profile.omega_max}
+    assert max(bound.values()) > 0.99
+    assert along.max() > 0.98 * profile.acceleration
+    assert along.min() < -0.98 * profile.deceleration
+
+
+def test_both_curvature_limits_bind_where_they_are_the_lower():
+    assert _bound(_build('zigzag, yaw rate bound'), 'yaw rate') > 0.99
+    assert _bound(_build('zigzag, lateral bound'), 'lateral') > 0.99
+
+
+def _bound(traj, which):
+    profile = traj.profile
+    t = _times(traj, 20001)
+    _, _, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    v = np.hypot(xdot, ydot)
+    moving = v > 1e-3
+    across = np.abs(xdot * yddot - ydot * xddot)[moving] / v[moving]
+    if which == 'lateral':
+        return across.max() / profile.lateral_acceleration
+    return (across / v[moving]).max() / profile.omega_max
+
+
+@pytest.mark.parametrize('name', [n for n in CASES if n != 'timed'])
+def test_it_starts_at_the_start_speed_and_ends_at_rest_on_the_last_point(name):
+    traj = _build(name)
+    points, profile = CASES[name]
+    x0, y0, yaw0 = traj.start_pose
+    x, y, xdot, ydot = traj.sample(0.0)
+    assert (x, y) == pytest.approx(tuple(points[0]), abs=1e-12)
+    assert math.hypot(xdot, ydot) == pytest.approx(profile.start_speed, abs=1e-9)
+    # Before t = 0 it moves along the start tangent at the start speed (rests at 0).
+    x, y, xdot, ydot = traj.sample(-2.0)
+    back = -2.0 * profile.start_speed
+    assert (x, y) == pytest.approx((x0 + back * math.cos(yaw0), y0 + back * math.sin(yaw0)))
+    assert traj.acceleration(-2.0) == (0.0, 0.0)
+    for t in (traj.duration, traj.duration + 1e-9, traj.duration + 100.0):
+        x, y, xdot, ydot = traj.sample(t)
+        assert (x, y) == pytest.approx(tuple(points[-1]), abs=1e-9)
+        assert (xdot, ydot) == (0.0, 0.0)
+        assert traj.acceleration(t) == (0.0, 0.0)
+    # It arrives, at rest, only at the end.
+    x, y, xdot, ydot = traj.sample(traj.duration - 0.5)
+    assert 0.0 < math.hypot(xdot, ydot) and math.hypot(x - points[-1, 0],
+                                                       y - points[-1, 1]) > 1e-3
+
+
+@pytest.mark.parametrize('length, duration', [
+    (10.0, 10.0 / 0.5 + 0.5 / 0.3),  # trapezoid: 0.5/0.3 s up, 10 m at 0.5 m/s less the ramps
+    (0.5, 2.0 * math.sqrt(2.0 * 0.25 / 0.3)),  # triangle: 0.5 m/s is never reached
+])
+def test_a_straight_path_has_the_duration_of_its_trapezoid(length, duration):
+    traj = PathTrajectory.from_points([(1.0, 2.0), (1.0 + length * 0.6, 2.0 + length * 0.8)],
+                                      PathProfile(speed=0.5, acceleration=0.3,
+                                                  deceleration=0.3))
+    assert traj.length == pytest.approx(length, abs=1e-9)
+    assert traj.duration == pytest.approx(duration, abs=1e-3)
+    half = traj.sample(traj.duration / 2.0)
+    assert math.hypot(half[2], half[3]) == pytest.approx(min(0.5, math.sqrt(0.3 * length)),
+                                                         rel=1e-3)
+
+
+def test_a_timed_path_is_at_each_point_at_its_stamp():
+    traj = PathTrajectory.from_points(TIMED, PathProfile(corner_radius=0.0))
+    assert traj.duration == 9.0
+    np.testing.assert_array_equal(traj.stamps, TIMED[:, 0])
+    np.testing.assert_array_equal(traj.points, TIMED[:, 1:])
+    for t, px, py in TIMED:
+        x, y, _, _ = traj.sample(float(t))
+        assert (x, y) == pytest.approx((px, py), abs=1e-6)
+    # At rest at the first and last stamps; always forwards between them.
+    assert traj.sample(0.0)[2:] == (0.0, 0.0)
+    assert traj.sample(9.0)[2:] == (0.0, 0.0)
+    t = np.linspace(0.0, 9.0, 9001)
+    _, _, xdot, ydot = traj.sample(t)
+    yaw = traj.heading(t)
+    assert np.all(xdot * np.cos(yaw) + ydot * np.sin(yaw) >= -1e-12)
+
+
+def test_a_timed_path_with_rounded_corners_passes_near_each_point_at_its_stamp():
+    traj = _build('timed')
+    allowed = [0.0] + [max(_cut(turn, 0.3), _cut(math.pi / 2.0, 0.3))
+                       for turn in _turns(TIMED[:, 1:])] + [0.0]
+    for (t, px, py), cut in zip(TIMED, allowed):
+        x, y, _, _ = traj.sample(float(t))
+        assert math.hypot(x - px, y - py) <= 1.02 * cut + 1e-3
+
+
+def test_a_timed_path_may_start_late_and_rests_until_then():
+    traj = PathTrajectory.from_points([(2.0, 1.0, 1.0), (4.0, 3.0, 1.0)])
+    assert traj.sample(0.0) == (1.0, 1.0, 0.0, 0.0)
+    assert traj.sample(1.9) == (1.0, 1.0, 0.0, 0.0)
+    assert traj.sample(3.0)[:2] == pytest.approx((2.0, 1.0))
+    assert traj.duration == 4.0
+
+
+# -- the interface --------------------------------------------------------------------------
+
+@pytest.mark.parametrize('name', list(CASES))
+def test_scalar_and_array_sampling_agree(name):
+    traj = _build(name)
+    t = _times(traj, 301)
+    arrays = traj.sample(t) + traj.acceleration(t) + (traj.heading(t),)
+    for i, ti in enumerate(t):
+        scalars = traj.sample(float(ti)) + traj.acceleration(float(ti)) + (traj.heading(ti),)
+        assert all(isinstance(v, float) for v in scalars)
+        np.testing.assert_allclose(scalars, [a[i] for a in arrays], rtol=0, atol=1e-12)
+    grid = t.reshape(7, 43)
+    assert all(np.shape(a) == grid.shape for a in traj.sample(grid) + traj.acceleration(grid))
+
+
+def test_the_heading_is_the_tangent_also_at_rest():
+    traj = _build('aisles')
+    assert traj.heading(-5.0) == pytest.approx(0.0, abs=1e-9)
+    assert traj.heading(0.0) == pytest.approx(0.0, abs=1e-9)
+    assert traj.heading(traj.duration + 5.0) == pytest.approx(-math.pi / 2.0)
+    t = _times(traj, 2001)
+    _, _, xdot, ydot = traj.sample(t)
+    moving = np.hypot(xdot, ydot) > 1e-6
+    gap = np.angle(np.exp(1j * (traj.heading(t) - np.arctan2(ydot, xdot))))
+    assert np.abs(gap[moving]).max() < 1e-9
+
+
+def test_it_cannot_be_changed_and_survives_pickling():
+    traj = _build('aisles')
+    with pytest.raises(FrozenInstanceError):
+        traj.duration = 1.0
+    with pytest.raises(ValueError):
+        traj.points[0, 0] = 5.0
+    again = pickle.loads(pickle.dumps(traj))
+    assert again.sample(12.3) == traj.sample(12.3)
+    assert 'length 24.605 m' in repr(traj)
+
+
+def test_sampling_one_instant_is_fast_enough_for_a_1_khz_loop():
+    traj = _build('aisles')
+    seconds = min(timeit.repeat(lambda: traj.sample(12.3), number=2000, repeat=5)) / 2000
+    assert seconds < 50e-6
+
+
+# -- any points -----------------------------------------------------------------------------
+
+COORDINATE = st.one_of(st.floats(-50.0, 50.0), st.sampled_from([0.0, 1.0, 1.0005, -50.0, 50.0]))
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(points=st.lists(st.tuples(COORDINATE, COORDINATE), max_size=30),
+       repeat=st.lists(st.integers(0, 29), max_size=5),
+       radius=st.sampled_from([0.0, 0.3, 2.0]), start=st.sampled_from([0.0, 0.4]),
+       timed=st.booleans())
+def test_any_points_give_a_finite_reference_or_a_parameter_error(points, repeat, radius,
+                                                                 start, timed):
+    for i in repeat:  # duplicates next to the original
+        if i < len(points):
+            points.insert(i, points[i])
+    given_points = np.array(points, dtype=float).reshape(-1, 2)
+    if timed:
+        given_points = np.column_stack([np.arange(len(points), dtype=float), given_points])
+    try:
+        traj = PathTrajectory.from_points(given_points, PathProfile(corner_radius=radius,
+                                                                    start_speed=start))
+    except ParameterError:
+        return
+    assert np.isfinite(traj.duration) and traj.duration > 0.0
+    assert np.isfinite(traj.length) and traj.length > 0.0
+    t = np.linspace(-1.0, traj.duration + 1.0, 50)
+    for value in traj.sample(t) + traj.acceleration(t) + (traj.heading(t),):
+        assert np.all(np.isfinite(value))
+    for ti in t[::7]:
+        assert np.all(np.isfinite(traj.sample(float(ti)) + traj.acceleration(float(ti))))
+    assert traj.sample(traj.duration + 1.0)[:2] == pytest.approx(tuple(traj.points[-1]),
+                                                                 abs=1e-6)
