@@ -29,7 +29,7 @@ HOLD_KEYS = ('t_conv_1cm', 'hold_distance_p99', 'hold_theta_e_p99', 'hold_omega_
     ('dlsmc', {'outer': {'C1': 'fast'}}, 'dlsmc.outer.C1', 'real number'),
     ('dlsmc_robot', {'thetadot_source': 'guess'}, 'dlsmc_robot.thetadot_source', 'one of'),
     ('dlsmc_robot', {'inner': {'eta_max': -1.0}}, 'dlsmc_robot.inner.eta_max', '>= 0'),
-    ('dlsmc', {'rate': 1.0}, 'dlsmc.rate', 'known: inner, outer, thetadot_filter'),
+    ('dlsmc', {'rate': 1.0}, 'dlsmc.rate', 'known: inner, omega_filter, omega_filter_band, outer'),
     ('lqr', None, 'controller', 'must be one of'),
 ])
 def test_bad_gains_name_the_parameter(name, block, parameter, text):
@@ -205,7 +205,8 @@ def pybullet_report(tmp_path_factory):
 def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
     assert document['plant'] == 'pybullet'
-    assert set(document) == {'plant', 'case1', 'case2'}  # no C1:C2 runs on the chassis
+    assert set(document) == {'plant', 'sensing', 'case1', 'case2'}  # no C1:C2 on the chassis
+    assert document['sensing'] == 'ideal'
     assert set(document['case1']) == {'1,4,0', '4,1,0'}
     assert set(document['case2']) == {'1,1,0.523599'}
     for starts in (document['case1'], document['case2']):
@@ -228,6 +229,30 @@ def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybul
     case1 = document['case1']['1,4,0']
     assert case1['dlsmc_robot']['hold_steer_joint_rate_max'] < 1.0  # rad/s: steering still
     assert case1['dlsmc']['hold_steer_joint_rate_max'] > 15.0  # at the 20 rad/s cap
+
+
+def test_with_sensing_every_law_sees_the_robots_odometry(tmp_path, pybullet_report):
+    out = tmp_path / 'good'
+    assert compare_cli.main(['--plant', 'pybullet', '--sensing', 'good', '--duration', '16',
+                             '--controllers', 'dlsmc_robot', '--out', str(out),
+                             '--jobs', '2']) == 0
+    good = json.loads((out / 'results.json').read_text())
+    ideal = json.loads((pybullet_report / 'results.json').read_text())
+    assert good['sensing'] == 'good'
+    text = (out / 'report.md').read_text()
+    assert text.startswith('# nfmr comparison report — pybullet chassis, good odometry')
+    assert 'Odometry `good` (`--sensing`): 100 Hz, 10 ms late' in text
+    for name in ('dlsmc', 'dlsmc_robot'):
+        # Noisy, late odometry: other runs, figures of the ground truth, a path still held.
+        noisy, exact = good['case1']['1,4,0'][name], ideal['case1']['1,4,0'][name]
+        assert noisy['iae'] != exact['iae']
+    robot = good['case1']['1,4,0']['dlsmc_robot']
+    assert robot['hold_distance_p99'] < 3e-3 and robot['hold_omega_saturated'] == 0.0
+
+
+def test_sensing_on_the_kinematic_plant_is_refused(capsys):
+    assert compare_cli.main(['--sensing', 'good', '--out', 'unused']) == 2
+    assert '--sensing applies to --plant pybullet' in capsys.readouterr().err
 
 
 def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):

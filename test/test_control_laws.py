@@ -158,6 +158,33 @@ def test_thetadot_filter_is_a_first_order_low_pass():
     assert ctrl.thetadot_d == pytest.approx(0.1 * raw)  # gain dt / (tau + dt) = 0.1
 
 
+def test_omega_filter_is_a_low_pass_of_the_saturated_omega_fading_with_the_error():
+    band = 0.05  # [rad]
+    plain = DlsmcController(DlsmcConfig())
+    smooth = DlsmcController(DlsmcConfig(omega_filter=0.009, omega_filter_band=band))
+    # On the path, then pushed a little off it, then far off it (|s_theta| beyond the band).
+    poses = [(0.0, 0.0, 0.0), (0.0005, 0.0, 0.0), (0.001, 0.0, 0.01), (0.0015, 0.0, 0.01),
+             (0.002, -0.3, 0.5)]
+    sent, filtered = None, 0
+    for k, pose in enumerate(poses):
+        reference = (0.5 * 0.001 * k, 0.0, 0.5, 0.0)
+        _, law = plain.step(*pose, *reference)
+        _, omega = smooth.step(*pose, *reference)
+        assert smooth.omega_raw == pytest.approx(plain.omega_raw)  # the law is unchanged
+        tau = 0.009 * max(0.0, 1.0 - abs(smooth.s_theta) / band)
+        if sent is None or tau == 0.0:
+            assert omega == pytest.approx(law)  # the first step, or beyond the band: as is
+        else:
+            assert omega == pytest.approx(sent + DT / (tau + DT) * (law - sent))
+            filtered += abs(omega - law) > 1e-3  # it lags a change of the law's omega
+        sent = omega
+    assert filtered >= 1 and abs(smooth.s_theta) > band
+    smooth.reset()
+    plain.reset()
+    start = (*poses[2], 0.0, 0.0, 0.5, 0.0)
+    assert smooth.step(*start)[1] == pytest.approx(plain.step(*start)[1])  # as is again
+
+
 def test_adapted_rates_follow_the_initial_error_and_keep_their_norm():
     from nfmr_dlsmc.core.gains import adapted_rates, RATIO_FLOOR
 

@@ -17,9 +17,12 @@ def truth(t):
     return 1.0 + V / W * math.sin(th), 4.0 + V / W * (1.0 - math.cos(th)), th
 
 
-def drive(estimator, seconds, rate, latency, sigma=0.0, seed=0, swap=False):
+def drive(estimator, seconds, rate, latency, sigma=0.0, seed=0, swap=False, push=0.0):
     """
     Close the estimator's loop on the turn: odometry every 1/rate s, ``latency`` s late.
+
+    The estimator is told the commands (V, W); with ``push`` [rad/s] the robot turns that
+    much faster than commanded (a disturbance the model does not know).
 
     Returns the per-tick (estimate - truth) and (latest odometry - truth) [m, m, rad].
     With ``swap``, every other message comes one period and one tick later still, after
@@ -44,7 +47,7 @@ def drive(estimator, seconds, rate, latency, sigma=0.0, seed=0, swap=False):
         pose = estimator.pose(t)
         if pose is None:
             continue
-        estimator.command(V, W)
+        estimator.command(V, W - push)
         real = truth(t)
         est_err.append(np.subtract(pose, real))
         odom_err.append(np.subtract(latest, real))
@@ -85,6 +88,23 @@ def test_noise_is_smoothed():
     rms = lambda e: float(np.sqrt(np.mean(e ** 2)))  # noqa: E731
     assert rms(est[tail, :2]) < 0.5 * sigma and rms(est[tail, 2]) < 0.5 * sigma
     assert rms(odom[tail, :2]) > 0.9 * sigma  # what the law would see without it
+
+
+def test_the_innovation_gate_follows_a_push_and_leaves_noise_alone():
+    sigma = 0.001  # [m], [rad]
+    walks = {'enabled': True, 'position_walk': 1e-4, 'yaw_walk': 3e-4}
+    trusting = PoseEstimator(EstimatorConfig(**walks))
+    gated = PoseEstimator(EstimatorConfig(**walks, innovation_gate=30.0))
+    # Pushed at 0.5 rad/s for half a second: the model alone takes it for noise.
+    lag = [np.max(np.abs(drive(e, 0.5, 100.0, 0.010, sigma=sigma, push=0.5)[0][100:, 2]))
+           for e in (trusting, gated)]
+    assert lag[0] > 0.08  # [rad]: a third of the 0.25 rad the push turned the robot
+    # sqrt(30) sigma, plus the turn of one period and of the latency (5 mrad each)
+    assert lag[1] < 0.025
+    # Noise alone never reaches a chi-square of 30 (once in a million messages).
+    runs = [drive(PoseEstimator(EstimatorConfig(**walks, innovation_gate=gate)), 5.0, 100.0,
+                  0.010, sigma=sigma, seed=3)[0] for gate in (0.0, 30.0)]
+    np.testing.assert_array_equal(runs[0], runs[1])
 
 
 def test_messages_out_of_order_end_in_the_same_estimate():

@@ -21,6 +21,7 @@ from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGIT
 from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES
 from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, format_metric
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.plants.registry import robot_plant
 
 #: Column order of Table 2 (the paper's) and the controllers it does not have.
@@ -439,9 +440,23 @@ def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, jobs:
     return ('Zhang et al., *Entropy* 2023, 25(1), 27, section 4.2, ' + setting + '. Inputs '
             'saturated at v in [0.2, 2] m/s, abs(omega) <= 1.59 rad/s for every controller. '
             f"Gains: `{gains_path}` (DLSMC: the paper's gains; DLSMC, robot profile: the "
-            "paper's gains with the four robot options of `config/robot_case1.yaml`; the "
+            "paper's gains with the five robot options of `config/robot_case1.yaml`; the "
             'others tuned on the kinematic model with the same budget, recorded in that '
             f'file). {runs} runs on {jobs} processes in {seconds:.1f} s (`nfmr-compare`).')
+
+
+def _sensing_note(sensing: str) -> list[str]:
+    """Return what the laws saw of the robot's pose, unless it was the ground truth."""
+    if sensing == 'ideal':
+        return []
+    odom = {key.split('.')[-1]: value for key, value in SENSING_PRESETS[sensing].items()}
+    return [f"Odometry `{sensing}` (`--sensing`): {odom['odom_rate']:g} Hz, "
+            f"{odom['odom_latency'] * 1e3:g} ms late, noise "
+            f"{odom['odom_position_noise'] * 1e3:g} mm / {odom['odom_yaw_noise'] * 1e3:g} mrad, "
+            f"bias random walk {odom['odom_position_bias_walk'] * 1e3:g} mm/sqrt(s) / "
+            f"{odom['odom_yaw_bias_walk'] * 1e3:g} mrad/sqrt(s). Every law sees the pose "
+            "through the robot profile's estimator (`estimator.*` of "
+            '`config/robot_case1.yaml`); every figure is of the ground truth.', '']
 
 
 def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
@@ -461,10 +476,13 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         f"On the {plant} chassis: the paper's rows are its kinematic-model values, printed "
         'for reference without a percentage, since the plants differ.', ''])
     lines = [
-        '# nfmr comparison report' + ('' if plant == 'kinematic' else f' — {plant} chassis'),
+        '# nfmr comparison report' + ('' if plant == 'kinematic' else f' — {plant} chassis')
+        + ('' if document.get('sensing', 'ideal') == 'ideal' else
+           f", {document['sensing']} odometry"),
         '',
         _introduction(plant, gains_path, seconds, runs, jobs, duration),
         '',
+        *_sensing_note(document.get('sensing', 'ideal')),
         '## Table 2 — Case 1, x0 = (1, 4, 0): distance error',
         '',
         *paper_note,

@@ -39,16 +39,18 @@ def checked_gain_blocks(path, names) -> dict:
 
 
 def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
-                     duration: float = CASE1_LONGITUDINAL.duration) -> list[tuple]:
+                     duration: float = CASE1_LONGITUDINAL.duration,
+                     sensing: str | None = None) -> list[tuple]:
     """
     Return every (scenario, controller) run of ``duration`` [s] on ``plant``.
 
     On the kinematic plant the DLSMC C1:C2 runs of Fig. 13 follow (the paper's kinematic
-    figure; left out on pybullet). A task is (key, name, block, scenario, plant), its key
-    (case, start, controller or "C1:C2").
+    figure; left out on pybullet). A task is (key, name, block, scenario, plant, sensing),
+    its key (case, start, controller or "C1:C2"); ``sensing`` as for
+    :func:`~nfmr_dlsmc.analysis.comparison_scenarios.run_scenario`.
     """
     scenarios = [replace(s, duration=duration) for s in SCENARIOS]
-    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant)
+    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant, sensing)
              for s in scenarios for name in names]
     if plant != 'kinematic':
         return tasks
@@ -57,7 +59,7 @@ def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
     for c1, c2 in C_RATIOS:
         outer = {**(base.get('outer') or {}), 'C1': c1, 'C2': c2}
         tasks.append((('c_ratio', longitudinal.start_key, f'{c1:g}:{c2:g}'), 'dlsmc',
-                      {**base, 'outer': outer}, longitudinal, plant))
+                      {**base, 'outer': outer}, longitudinal, plant, sensing))
     return tasks
 
 
@@ -80,9 +82,9 @@ def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
 
 
 def _run_task(task: tuple) -> tuple:
-    """Run one task in a worker: (key, name, block, scenario, plant) -> (key, metrics, series)."""
-    key, name, block, scenario, plant = task
-    result = run_scenario(name, block, scenario, plant)
+    """Run one task in a worker (:func:`comparison_tasks`) -> (key, metrics, series)."""
+    key, name, block, scenario, plant, sensing = task
+    result = run_scenario(name, block, scenario, plant, sensing)
     pulses = [p.start for p in scenario.disturbance.pulses]
     metrics = run_metrics(result, InputLimits().omega_max, pulses)
     return key, metrics, _plot_series(result)
@@ -113,14 +115,17 @@ def _envelope(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return blocks.min(axis=1), blocks.max(axis=1), blocks.mean(axis=1)
 
 
-def results_document(metrics: dict, plant: str) -> dict:
+def results_document(metrics: dict, plant: str, sensing: str | None = None) -> dict:
     """
     Return ``results.json``'s document.
 
-    ``"plant"`` -> the plant's name, and case -> start -> controller -> metrics (the C1:C2
-    runs under ``c_ratio`` -> start -> "C1:C2").
+    ``"plant"`` -> the plant's name, ``"sensing"`` -> the odometry preset on pybullet
+    (``ideal`` unless given), and case -> start -> controller -> metrics (the C1:C2 runs
+    under ``c_ratio`` -> start -> "C1:C2").
     """
     document = {'plant': plant}
+    if plant == 'pybullet':
+        document['sensing'] = sensing or 'ideal'
     for (case, start, name), values in metrics.items():
         document.setdefault(case, {}).setdefault(start, {})[name] = values
     return document

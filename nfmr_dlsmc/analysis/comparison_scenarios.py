@@ -10,10 +10,15 @@ import math
 
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
+from nfmr_dlsmc.core.sensing import with_sensing
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import SimResult, simulate, with_steer_angles
 from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.share import shipped_config
 
 #: The plants a scenario runs on: the unicycle model (3), forward Euler; the simulated
 #: 4WIS chassis (Table 1, double Ackermann) in this process.
@@ -59,8 +64,13 @@ CASE2 = Scenario('case2', (1.0, 1.0, math.pi / 6.0), paper_disturbance())
 SCENARIOS = (CASE1_LONGITUDINAL, CASE1_LATERAL, CASE2)
 
 
+def robot_estimator() -> EstimatorConfig:
+    """Return the pose estimator of the robot profile (``config/robot_case1.yaml``)."""
+    return controller_params(load_params_file(shipped_config('robot_case1.yaml'))).estimator
+
+
 def run_scenario(name: str, block: dict | None, scenario: Scenario,
-                 plant: str = 'kinematic') -> SimResult:
+                 plant: str = 'kinematic', sensing: str | None = None) -> SimResult:
     """
     Run controller ``name`` with gain block ``block`` on ``scenario`` and ``plant``.
 
@@ -68,17 +78,24 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     the result's ``steer`` holds the steer angles [rad] the double Ackermann mapping would
     command for (v, omega + disturbance); on pybullet the disturbance is added to omega
     before the wheel mapping and the chassis is that of the default world of the registered
-    ``pybullet`` plant (Table 1, physics at 1 ms).
+    ``pybullet`` plant (Table 1, physics at 1 ms). With a ``sensing`` preset (pybullet
+    only) the world's odometry is the preset's and every law sees the pose through the
+    robot profile's estimator (``config/robot_case1.yaml``), so that all compare alike.
     """
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
+    if sensing is not None and plant != 'pybullet':
+        raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
+                             'kinematic model has no odometry')
     controller = build_controller(name, block, dt=scenario.dt)
     trajectory = make_trajectory('sine')
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
+        world = plant_.settings({} if sensing is None else with_sensing({}, sensing)).world
+        estimator = None if sensing is None else robot_estimator()
         return plant_.simulate(controller, trajectory, scenario.x0, scenario.duration,
-                               plant_.settings({}).world, RobotGeometry(), SteerMode(),
-                               scenario.disturbance, None)
+                               world, RobotGeometry(), SteerMode(), scenario.disturbance,
+                               None, estimator)
     result = simulate(controller, trajectory, scenario.x0, scenario.duration, scenario.dt,
                       scenario.disturbance)
     return with_steer_angles(result, RobotGeometry(), SteerMode())

@@ -29,7 +29,9 @@ from nfmr_dlsmc.cli.common import (
     positive_integer,
     positive_number,
     run_command,
+    UsageError,
 )
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.share import shipped_config
 
 
@@ -45,6 +47,10 @@ def _parser() -> argparse.ArgumentParser:
                         help='kinematic: the unicycle model (3), as the paper (default); '
                              'pybullet: the simulated 4WIS chassis, in-process, without the '
                              'C1:C2 runs of Fig. 13')
+    parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
+                        help="pybullet: the robot's odometry (rate, latency, noise, bias) "
+                             'from a preset, every law seeing the pose through the robot '
+                             "profile's estimator (default: ideal, the ground truth)")
     parser.add_argument('--duration', type=positive_number, default=CASE1_LONGITUDINAL.duration,
                         help="length of every run [s] (default 100, the paper's; shorter "
                              'for a quick look: the hold figures start at 15 s)')
@@ -70,19 +76,23 @@ def _run(args) -> int:
     names = list(dict.fromkeys(['dlsmc', *args.controllers]))
     blocks = checked_gain_blocks(gains_path, names)
     check_writable(args.out, '--out', directory=True)  # after the checks, before the runs
-    tasks = comparison_tasks(names, blocks, args.plant, args.duration)
+    if args.sensing is not None and args.plant != 'pybullet':
+        raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
+                         'odometry')
+    tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
     begin = time.perf_counter()
 
     def progress(done, total, key):
         print(f'\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  '
               f'{key[0]} {key[1]} {key[2]:<16}', end='', file=sys.stderr, flush=True)
 
+    odometry = '' if args.sensing is None else f' with {args.sensing} odometry'
     print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
-          f'plant, {args.jobs} processes, gains from {gains_path}', file=sys.stderr)
+          f'plant{odometry}, {args.jobs} processes, gains from {gains_path}', file=sys.stderr)
     metrics, series = run_all(tasks, args.jobs, progress)
     print(file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
-    document = results_document(metrics, args.plant)
+    document = results_document(metrics, args.plant, args.sensing)
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
     figures = write_figures(args.out, series, names, args.plant)
     write_report(args.out / 'report.md', document, figures, gains_path,

@@ -31,7 +31,10 @@ class CascadeController(SaturatedController):
        with this step's saturated v;
     4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
        attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
-    5. saturation v in [v_min, v_max], |omega| <= omega_max.
+    5. saturation v in [v_min, v_max], |omega| <= omega_max;
+    6. optionally (``omega_tau`` > 0) a first-order low-pass of omega from the second step
+       on, time constant ``omega_tau`` (1 - abs(s_theta) / ``omega_band``) [s] (none from
+       abs(s_theta) >= ``omega_band`` [rad] on).
 
     The outer loop exposes ``s_x`` and ``s_y`` (its sliding variables) after a step.
 
@@ -53,18 +56,21 @@ class CascadeController(SaturatedController):
     TELEMETRY_FIELDS = ('x_e', 'y_e', 'theta_d', 'thetadot_d', 'theta_e', 's_x', 's_y',
                         'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated')
 
-    __slots__ = ('name', '_filter_tau', '_analytic', 'outer', 'inner', '_has_previous',
-                 'x_e', 'y_e', 'theta_d', 'thetadot_d', 's_theta', 'v_raw', 'omega_raw',
-                 'v_saturated', 'omega_saturated')
+    __slots__ = ('name', '_filter_tau', '_omega_tau', '_omega_band', '_analytic', 'outer',
+                 'inner', '_has_previous', 'x_e', 'y_e', 'theta_d', 'thetadot_d', 's_theta',
+                 'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated', '_omega')
 
     def __init__(self, outer, inner, limits: InputLimits | None = None, dt: float = 0.001,
-                 filter_tau: float = 0.0, name: str = 'cascade', analytic_rate: bool = False):
+                 filter_tau: float = 0.0, name: str = 'cascade', analytic_rate: bool = False,
+                 omega_tau: float = 0.0, omega_band: float = 0.005):
         super().__init__(limits, dt)
         self.name = name
         self._analytic = analytic_rate
         self.outer = outer
         self.inner = inner
         self._filter_tau = filter_tau  # [s]
+        self._omega_tau = omega_tau  # [s] low-pass of the commanded omega (0: none)
+        self._omega_band = omega_band  # [rad] abs(s_theta) at which it has faded out
         self.reset()
 
     def reset(self) -> None:
@@ -76,6 +82,7 @@ class CascadeController(SaturatedController):
         self.theta_d = self.thetadot_d = self.s_theta = 0.0
         self.v_raw = self.omega_raw = 0.0
         self.v_saturated = self.omega_saturated = False
+        self._omega = None  # [rad/s] the last commanded omega (None before the first step)
 
     def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
              ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
@@ -135,6 +142,13 @@ class CascadeController(SaturatedController):
             -limits.omega_max if omega_raw < -limits.omega_max else omega_raw)
         self.v_saturated = v != v_raw
         self.omega_saturated = omega != omega_raw
+        if self._omega_tau > 0.0 and self._omega is not None:
+            # First-order low-pass of the saturated omega, its time constant fading out with
+            # abs(s_theta); the first step takes omega as is.
+            tau = self._omega_tau * (1.0 - abs(s_theta) / self._omega_band)
+            if tau > 0.0:
+                omega = self._omega + dt / (tau + dt) * (omega - self._omega)
+        self._omega = omega
         self.x_e, self.y_e = x_e, y_e
         self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
         self.v_raw, self.omega_raw = v_raw, omega_raw

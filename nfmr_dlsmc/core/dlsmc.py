@@ -50,6 +50,8 @@ class DlsmcController(CascadeController):
         self._limits = config.limits
         self._dt = config.dt
         self._filter_tau = config.thetadot_filter
+        self._omega_tau = config.omega_filter
+        self._omega_band = config.omega_filter_band
         self._analytic = config.thetadot_source == 'analytic'
         self.outer.gains = config.outer
         self.inner.gains = config.inner

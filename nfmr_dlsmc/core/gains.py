@@ -180,7 +180,8 @@ class DlsmcConfig:
     (``thetadot_filter``); ``analytic`` (robot profile) as the time derivative of
     theta_d = atan2(u_y, u_x) computed from the outer law and the kinematic model's error
     rate (see :meth:`~nfmr_dlsmc.core.outer_loop.BtintsmcOuterLoop.input_rate`;
-    doc/design.md, D5).
+    doc/design.md, D5) ``omega_filter`` smooths the commanded omega (robot profile, doc/design.md,
+    D14).
     """
 
     outer: OuterLoopGains = field(default_factory=OuterLoopGains)
@@ -193,6 +194,15 @@ class DlsmcConfig:
     thetadot_source: str = param('difference', '', 'difference: backward difference of '
                                  'theta_d (paper); analytic: derivative of eq. (40) along '
                                  'the model (robot profile)', one_of('difference', 'analytic'))
+    omega_filter: float = param(0.0, 's', 'time constant of a first-order low-pass on the '
+                                'commanded omega, after saturation (robot option: each '
+                                "odometry update steps the law's omega, and the steering with "
+                                'it; 0: none, the paper)', NON_NEGATIVE)
+    omega_filter_band: float = param(0.005, 'rad', 'the low-pass of omega_filter acts in full '
+                                     'at s_theta = 0 and fades out linearly towards '
+                                     'abs(s_theta) = this: small corrections are smoothed, a '
+                                     'large error (a disturbance) is answered at once',
+                                     POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -205,4 +215,5 @@ class DlsmcConfig:
     def is_paper_law(self) -> bool:
         """Tell whether every robot-profile option is off (the paper's equations)."""
         return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
-                and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference')
+                and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference'
+                and self.omega_filter == 0.0)

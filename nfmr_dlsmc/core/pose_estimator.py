@@ -18,7 +18,14 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
-from nfmr_dlsmc.core.schema import check_fields, documented, FLAG, param, POSITIVE
+from nfmr_dlsmc.core.schema import (
+    check_fields,
+    documented,
+    FLAG,
+    NON_NEGATIVE,
+    param,
+    POSITIVE,
+)
 import numpy as np
 
 __all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR']
@@ -58,6 +65,12 @@ class EstimatorConfig:
                             'commanded yaw rate; process noise', POSITIVE)
     history: float = param(0.5, 's', 'how old an odometry message may be and still be fused '
                            'at its stamp', POSITIVE)
+    innovation_gate: float = param(0.0, '', "bound on a message's normalised innovation "
+                                   'squared (chi-square, 3 degrees of freedom; 16.3: one '
+                                   'message in a thousand of pure noise): a message beyond it '
+                                   'widens the covariance until it lies on the bound, so that '
+                                   'a real disturbance is followed at once instead of taken '
+                                   'for noise (0: never)', NON_NEGATIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -121,10 +134,26 @@ class PoseEstimator:
         return x, F @ P @ F.T + np.diag([qp, qp, qw])
 
     def _update(self, x, P, measured):
-        """Fuse a measured pose z with covariance R: it measures the state itself (H = I)."""
+        """
+        Fuse a measured pose z with covariance R: it measures the state itself (H = I).
+
+        With ``innovation_gate`` g > 0, an innovation nu whose normalised square
+        d = nu^T S^-1 nu (S = P + R) exceeds g first widens the prior to
+        P' = (d / g) S - R (positive semi-definite, since d / g > 1), so that S' = (d / g) S
+        and nu^T S'^-1 nu = g: an adaptive fading memory, the update trusting the message
+        more the less the model explains it.
+        """
         z, R = measured
         innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(z[2] - x[2], math.tau)])
-        K = P @ np.linalg.inv(P + R)
+        S = P + R
+        S_inv = np.linalg.inv(S)
+        gate = self.config.innovation_gate
+        if gate > 0.0:
+            d = float(innovation @ S_inv @ innovation)
+            if d > gate:
+                P = (d / gate) * S - R
+                S_inv *= gate / d
+        K = P @ S_inv
         return x + K @ innovation, (np.eye(3) - K) @ P
 
     def _fuse(self, tick: _Tick, until: float):

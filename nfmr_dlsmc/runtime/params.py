@@ -7,7 +7,8 @@ matches any node). Nested mappings are flattened to the dotted names that ROS us
 (:func:`controller_parameters`, the README's table) come from the schema of their config
 classes (:mod:`nfmr_dlsmc.core.schema`):
 
-- ``outer.*``, ``inner.*``, ``limits.*``, ``thetadot_filter`` and ``thetadot_source``
+- ``outer.*``, ``inner.*``, ``limits.*``, ``thetadot_filter``, ``thetadot_source`` and
+  ``omega_filter``
   (:mod:`nfmr_dlsmc.core.gains`); ``control_rate`` [Hz], whose inverse is the control
   period;
 - ``trajectory.name`` and each trajectory's parameters under its name
