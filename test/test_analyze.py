@@ -6,6 +6,7 @@ from pathlib import Path
 import subprocess
 import sys
 
+from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.trajectories import make_trajectory
@@ -13,8 +14,10 @@ from nfmr_dlsmc.plants.kinematic import simulate
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS
 import numpy as np
 import pytest
+from rclpy.serialization import serialize_message
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_typestore, Stores
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from synthetic_bags import odometry_messages, state_rows, write_run_bag
 
 ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
@@ -147,3 +150,41 @@ def test_bag_without_the_state_topic_names_what_is_missing(case1, tmp_path):
     assert proc.returncode == 2
     line = proc.stderr.strip()
     assert 'no /controller_state messages' in line and '/odom' in line
+
+
+def _state_bag(directory, rows_and_strays):
+    """Write /controller_state messages: rows (with the layout) and stray value lists."""
+    dim = [MultiArrayDimension(label=','.join(STATE_FIELDS), size=len(STATE_FIELDS),
+                               stride=len(STATE_FIELDS))]
+    with BagWriter(directory) as writer:
+        writer.add_topic('/controller_state', 'std_msgs/msg/Float64MultiArray',
+                         [QosProfile(depth=1000)])
+        for k, values in enumerate(rows_and_strays):
+            msg = Float64MultiArray(data=list(values))
+            if len(values) == len(STATE_FIELDS):
+                msg.layout.dim = dim
+            writer.write('/controller_state', 1000 + k * 1_000_000, serialize_message(msg))
+
+
+def test_stray_messages_on_the_state_topic_are_skipped_and_counted(case1, tmp_path):
+    rows = list(state_rows(case1)[::10])
+    strays = [[1.0, 2.0, 3.0]] * 3  # published from outside during the run
+    _state_bag(tmp_path / 'clean', rows)
+    _state_bag(tmp_path / 'strays', rows[:100] + strays[:2] + rows[100:5000] + strays[2:]
+               + rows[5000:])
+    clean, stray = (analyze(tmp_path / name, '--json') for name in ('clean', 'strays'))
+    assert stray.returncode == 0, stray.stderr
+    assert '3 /controller_state messages of another shape' in stray.stderr
+    assert last_json(stray)['bags'][0]['metrics'] == last_json(clean)['bags'][0]['metrics']
+
+
+def test_a_run_whose_tracking_started_over_is_measured_on_its_last_segment(case1, tmp_path):
+    rows = state_rows(case1)[::10]
+    _state_bag(tmp_path / 'restarted', list(rows[:3000]) + list(rows))  # t back to 0 at 30 s
+    _state_bag(tmp_path / 'last', list(rows))
+    restarted, last = (analyze(tmp_path / name, '--json') for name in ('restarted', 'last'))
+    assert restarted.returncode == 0, restarted.stderr
+    assert 'tracking started over 1 times' in restarted.stderr
+    got = last_json(restarted)['bags'][0]['metrics']
+    assert got == last_json(last)['bags'][0]['metrics']
+    assert got['iae'] > 0.0 and got['ise'] > 0.0

@@ -73,9 +73,13 @@ class Client(Peer):
         wait_for(future.done, what=f'an answer of {client.srv_name}')
         return future.result()
 
-    def change(self, transition: str) -> bool:
+    def change(self, transition: str | int) -> bool:
+        """Request a transition by label, or by id if ``transition`` is an integer."""
         request = ChangeState.Request()
-        request.transition.label = transition
+        if isinstance(transition, int):
+            request.transition.id = transition
+        else:
+            request.transition.label = transition
         return self._call(self._change, request).success
 
     def state(self) -> str:
@@ -312,3 +316,17 @@ def test_the_clock_loop_ticks_only_while_active(system):
     assert client.twists[-1][1].linear.x == 0.0 and twists == ticks + 1
     time.sleep(0.5)
     assert (len(client.states), len(client.twists)) == (ticks, twists)
+
+
+def test_a_transition_not_offered_is_refused_by_id_as_by_label(system, log):
+    node, client = system()
+    # 3 (activate) and 4 (deactivate) are not offered while unconfigured; rclpy raises on
+    # such an id and ends the node.
+    assert not client.change(3)
+    assert not client.change('activate')
+    assert client.state() == 'unconfigured'
+    wait_for(lambda: any("transition id 3 refused: not offered in state 'unconfigured'" in m
+                         for m in log.read()), what='the warning')
+    assert client.change(1)  # configure, by id
+    assert client.change(3)  # activate, by id
+    assert client.state() == 'active'

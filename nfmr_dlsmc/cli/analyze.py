@@ -27,8 +27,10 @@ from nfmr_dlsmc.ros.run_analysis import (
     ANIMATION_TOPICS,
     GROUND_TRUTH_TOPIC,
     JOINT_TOPIC,
+    last_segment,
     metrics_table,
     plot_runs,
+    run_notes,
     state_metrics,
     state_series,
     STATE_TOPIC,
@@ -139,7 +141,10 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
     warning = contents.warning()
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
-    series = with_ground_truth(state_series(contents), contents)
+    state, skipped = state_series(contents)
+    series = with_ground_truth(state, contents)
+    for note in run_notes(skipped, last_segment(series)[1]):
+        print(f'nfmr-analyze: warning: {path}: {note}', file=sys.stderr)
     return {'path': str(path), 'label': _label(path), 'series': series,
             'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
             'truncated': contents.truncated, 'contents': contents if animate else None}

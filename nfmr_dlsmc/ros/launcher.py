@@ -39,9 +39,11 @@ from nfmr_dlsmc.ros.run_analysis import (
     DIAGNOSTICS_TOPIC,
     GROUND_TRUTH_TOPIC,
     JOINT_TOPIC,
+    last_segment,
     loop_figures,
     metrics_table,
     plot_runs,
+    run_notes,
     state_metrics,
     state_series,
     STEER_FIELDS,
@@ -616,7 +618,11 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
     """
     contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC,
                                          DIAGNOSTICS_TOPIC])
-    series = with_ground_truth(state_series(contents), contents)
+    state, skipped = state_series(contents)
+    series = with_ground_truth(state, contents)
+    _, segments = last_segment(series)
+    for note in run_notes(skipped, segments):
+        print(f'nfmr-run: warning: {note}', file=sys.stderr)
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
                                               steer_joint_rates(contents)))]
     runs = [('ROS pybullet', series)]

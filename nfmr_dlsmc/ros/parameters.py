@@ -66,7 +66,34 @@ class SchemaNode(SchemaNodeMixin, Node):
 
 
 class SchemaLifecycleNode(SchemaNodeMixin, LifecycleNode):
-    """A managed (lifecycle) node whose parameters are declared from their schema."""
+    """
+    A managed (lifecycle) node whose parameters are declared from their schema.
+
+    A ``change_state`` request naming a transition (by id or by label) that the current
+    state does not offer is refused (``success`` false, one warning), as rclpy refuses an
+    unknown label; rclpy would raise on an unknown id and end the node.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        service = self._service_change_state
+        take = service.callback
+
+        def guarded(request, response):
+            offered = {t[0]: t[1] for t in self._state_machine.available_transitions}
+            label = request.transition.label
+            if (label and label not in offered.values()) or (
+                    not label and request.transition.id not in offered):
+                asked = label or f'id {request.transition.id}'
+                state = self._state_machine.current_state[1]
+                self.get_logger().warning(
+                    f"transition {asked} refused: not offered in state '{state}' (offered: "
+                    + ', '.join(f'{i} {name}' for i, name in sorted(offered.items())) + ')')
+                response.success = False
+                return response
+            return take(request, response)
+
+        service.callback = guarded
 
 
 def _declare_parameters(node: Node, params: list[Param]) -> dict:

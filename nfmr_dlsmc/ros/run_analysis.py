@@ -61,17 +61,25 @@ NEEDED_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_d', 'theta_r', 'th
                  'omega', 'stopped')
 
 
-def state_series(contents: BagContents) -> dict:
+def state_series(contents: BagContents) -> tuple[dict, int]:
     """
     Return the ``controller_state`` messages of a read bag as arrays keyed by field name.
 
-    The field names come from the messages' layout label (``t,x,y,...``), else
-    :data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`.
+    The field names come from the layout label (``t,x,y,...``) of the first message that
+    has one, else :data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`. Messages of
+    another length (a foreign publisher, a malformed message) are skipped.
+
+    Returns
+    -------
+    dict
+        Field name -> values of the well-formed messages.
+    int
+        How many messages were skipped.
 
     Raises
     ------
     BagError
-        No such topic, a different type, or fields missing.
+        No such topic, a different type, fields missing, or no well-formed message.
 
     """
     messages = contents.of(STATE_TOPIC)
@@ -83,17 +91,46 @@ def state_series(contents: BagContents) -> dict:
     if type_name != 'std_msgs/msg/Float64MultiArray':
         raise BagError(f'{contents.path}: {STATE_TOPIC} has type {type_name}, expected '
                        'std_msgs/msg/Float64MultiArray')
-    first = deserialize_message(messages[0].data, Float64MultiArray)
-    names = first.layout.dim[0].label.split(',') if first.layout.dim else list(STATE_FIELDS)
+    decoded = [deserialize_message(m.data, Float64MultiArray) for m in messages if len(m.data)]
+    labelled = next((msg for msg in decoded if msg.layout.dim and msg.layout.dim[0].label),
+                    None)
+    names = labelled.layout.dim[0].label.split(',') if labelled else list(STATE_FIELDS)
     missing = [n for n in NEEDED_FIELDS if n not in names]
     if missing:
         raise BagError(f"{contents.path}: {STATE_TOPIC} lacks the fields {', '.join(missing)}")
-    rows = np.array([np.asarray(deserialize_message(m.data, Float64MultiArray).data)
-                     for m in messages if len(m.data)], dtype=float)
-    if rows.ndim != 2 or rows.shape[1] != len(names):
-        raise BagError(f'{contents.path}: {STATE_TOPIC} messages do not all have '
-                       f'{len(names)} values')
-    return {name: rows[:, i] for i, name in enumerate(names)}
+    rows = [msg.data for msg in decoded if len(msg.data) == len(names)]
+    if not rows:
+        raise BagError(f'{contents.path}: no {STATE_TOPIC} message has the {len(names)} '
+                       'values of its layout')
+    rows = np.array(rows, dtype=float)
+    return {name: rows[:, i] for i, name in enumerate(names)}, len(messages) - len(rows)
+
+
+def last_segment(series: dict) -> tuple[dict, int]:
+    """
+    Return the ticks of the last tracking segment, and how many segments the series has.
+
+    Trajectory time ``t`` starts over when tracking does (a restarted odometry source,
+    doc/design.md D10): integrals over a series whose time goes back would count time
+    backwards. A segment begins wherever ``t`` decreases.
+    """
+    t = series['t']
+    starts = np.flatnonzero(np.diff(t) < 0.0) + 1
+    if not len(starts):
+        return series, 1
+    return {k: v[starts[-1]:] for k, v in series.items()}, len(starts) + 1
+
+
+def run_notes(skipped: int, segments: int) -> list[str]:
+    """Return what a reader of a run's figures must know of its state messages."""
+    notes = []
+    if skipped:
+        notes.append(f'{skipped} {STATE_TOPIC} messages of another shape (not this '
+                     "controller's) skipped")
+    if segments > 1:
+        notes.append(f'tracking started over {segments - 1} times (trajectory time went '
+                     'back): the figures are of the last segment')
+    return notes
 
 
 def loop_figures(contents: BagContents) -> dict | None:
@@ -182,11 +219,13 @@ def state_metrics(series: dict, hold_from: float = HOLD_FROM,
     Return the :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the ticks of a run.
 
     Each tick is weighted by its own duration; ticks where safety stopped the robot are
-    left out. The hold figures use the state's saturation flags and steer angles (bags recorded
-    before the state carried them have no steer figure) and, with ``joint_rates`` from
+    left out, and so are the tracking segments before the last (:func:`last_segment`). The
+    hold figures use the state's saturation flags and steer angles (bags recorded before
+    the state carried them have no steer figure) and, with ``joint_rates`` from
     :func:`steer_joint_rates`, the measured steer joint rates stamped at or after
     ``hold_from`` (sim time, which starts with trajectory time within a step).
     """
+    series, _ = last_segment(series)
     keep = series['stopped'] == 0.0
     s = {k: v[keep] for k, v in series.items()}
     steer = (np.column_stack([s[name] for name in STEER_FIELDS])
@@ -503,7 +542,7 @@ def animation_series(contents: BagContents, config: AnimationConfig = AnimationC
         A topic is missing or the three share no time span.
 
     """
-    state = state_series(contents) if series is None else series
+    state = state_series(contents)[0] if series is None else series
     distance = np.hypot(state['x'] - state['x_d'], state['y'] - state['y_d'])
     state_ns = np.round(1e9 * state['t']).astype(np.int64)
     state_delay = _recorder_delay([m for m in contents.of(STATE_TOPIC) if len(m.data)],
