@@ -57,6 +57,24 @@ CASES = [
                                          '    motors: {drive_gear_ratio: 0.0}\n'))],
      'motors.drive_gear_ratio = 0.0: must be > 0'),
     ('sim', lambda d: ['--ros-args', '-p', 'mode:=fast'], "mode = 'fast'"),
+    # Numbers out of range: refused before any work, not deep in a worker.
+    ('nfmr-compare', lambda d: ['--duration', '0.0004', '--controllers', 'pid', '--out',
+                                str(d / 'r')], 'shorter than 10 control periods'),
+    ('nfmr-compare', lambda d: ['--duration', '1e9', '--out', str(d / 'r')],
+     'GiB of memory'),
+    ('nfmr-tune', lambda d: ['--duration', '0.0004', '--out', str(d / 't.yaml')],
+     'shorter than one control period'),
+    ('nfmr-tune', lambda d: ['--duration', '1e9', '--out', str(d / 't.yaml')],
+     'GiB of memory'),
+    ('nfmr-montecarlo', lambda d: ['--n', '2', '--duration', '0.0004'],
+     'shorter than one control period'),
+    ('nfmr-montecarlo', lambda d: ['--seed', '-1'], 'argument --seed: must be >= 0'),
+    ('nfmr-replay', lambda d: [str(d / 'nobag'), '--rate', '1e-300'],
+     'argument --rate: must be within 0.001-1000'),
+    ('nfmr-run', lambda d: ['--duration', 'inf', '--out', str(d / 'runs')],
+     '--duration must be a finite number > 0'),
+    ('nfmr-run', lambda d: ['--duration', '1e-9', '--out', str(d / 'runs')],
+     'must be at least one control period'),
 ]
 
 
@@ -70,7 +88,7 @@ def test_every_console_script_is_covered():
 
     scripts = {e.name for e in entry_points(group='console_scripts')
                if e.value.startswith(('nfmr_dlsmc.', 'nfmr_sim.'))}
-    assert scripts == {name for name, _, _ in CASES}
+    assert scripts == {name for name, _, _ in CASES}  # every one at least once
     assert len(scripts) == 12  # ten nfmr-* commands and the two nodes
 
 

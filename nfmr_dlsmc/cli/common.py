@@ -101,6 +101,17 @@ def _number(text: str, rule, rule_text: str) -> float:
     return value
 
 
+def non_negative_integer(text: str) -> int:
+    """Argparse type: an integer >= 0 (a seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'must be >= 0, got {text!r}')
+    return value
+
+
 def positive_integer(text: str) -> int:
     """Argparse type: an integer >= 1."""
     try:
@@ -226,6 +237,45 @@ def check_output_file(path: Path, force: bool) -> None:
         raise UsageError(f'--out {path} is a file shipped with nfmr; write elsewhere or '
                          'add --force to replace it')
     check_writable(path, '--out')
+
+
+def check_run_length(duration: float, dt: float, runs_at_once: int = 1,
+                     minimum_steps: int = 1) -> int:
+    """
+    Refuse, before any work, a run shorter than ``minimum_steps`` or too long to keep.
+
+    Parameters
+    ----------
+    duration : float
+        ``--duration`` [s].
+    dt : float
+        Control period [s].
+    runs_at_once : int
+        How many runs are recorded in memory at the same time (one per worker process).
+    minimum_steps : int
+        The fewest control periods the command can use (its figures' resolution).
+
+    Returns
+    -------
+    int
+        The number of steps of a run.
+
+    Raises
+    ------
+    UsageError
+        Less than one step, or more memory than is available.
+
+    """
+    steps = round(duration / dt)
+    if steps < minimum_steps:
+        shortest = ('one control period' if minimum_steps == 1 else
+                    f'{minimum_steps} control periods')
+        raise UsageError(f'--duration {duration:g} s is shorter than {shortest} '
+                         f'({minimum_steps * dt:g} s)')
+    check_memory(runs_at_once * steps * RECORDED_STEP_BYTES,
+                 f'--duration {duration:g} s ({steps:.3g} steps of {dt:g} s'
+                 + (f', {runs_at_once} runs at once)' if runs_at_once > 1 else ')'))
+    return steps
 
 
 def check_memory(needed: float, what: str) -> None:

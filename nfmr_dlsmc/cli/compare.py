@@ -17,12 +17,14 @@ import time
 from nfmr_dlsmc.analysis.comparison_runs import (
     checked_gain_blocks,
     comparison_tasks,
+    DECIMATION,
     results_document,
     run_all,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
+    check_run_length,
     check_writable,
     json_ready,
     OneLineParser,
@@ -80,6 +82,8 @@ def _run(args) -> int:
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')
     tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
+    # Its figures show a point every DECIMATION steps: at least one.
+    check_run_length(args.duration, tasks[0][3].dt, min(args.jobs, len(tasks)), DECIMATION)
     begin = time.perf_counter()
 
     def progress(done, total, key):

@@ -12,13 +12,12 @@ from nfmr_dlsmc.analysis.comparison_scenarios import PLANTS
 from nfmr_dlsmc.analysis.evaluation import evaluate, format_table, load_evaluation, paper_values
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
-    check_memory,
+    check_run_length,
     json_ready,
     non_negative_number,
     number_triple,
     OneLineParser,
     positive_number,
-    RECORDED_STEP_BYTES,
     run_command,
     UsageError,
 )
@@ -86,7 +85,7 @@ def _run(args) -> int:
     evaluation = load_evaluation(args.plant, args.controller, args.x0, args.duration,
                                  args.disturbance, args.params, args.gains, args.dt,
                                  args.trajectory, args.sensing)
-    _check_length(args.duration, evaluation.params.dlsmc.dt)
+    check_run_length(args.duration, evaluation.params.dlsmc.dt)
     show = args.plant == 'pybullet' and sys.stderr.isatty()
 
     def progress(t):
@@ -106,16 +105,6 @@ def _run(args) -> int:
         print(f"{result['scenario']['steps']} steps in {cpu_s:.2f} s CPU "
               f'({args.duration / max(cpu_s, 1e-9):.1f}x real time)')
     return 0
-
-
-def _check_length(duration: float, dt: float) -> None:
-    """Refuse less than one step, or more than the recorded run can keep in memory."""
-    steps = round(duration / dt)
-    if steps < 1:
-        raise UsageError(f'--duration {duration:g} s is shorter than one control period '
-                         f'({dt:g} s)')
-    check_memory(steps * RECORDED_STEP_BYTES,
-                 f'--duration {duration:g} s ({steps:.3g} steps of {dt:g} s)')
 
 
 if __name__ == '__main__':

@@ -24,13 +24,14 @@ from nfmr_dlsmc.analysis.run_setup import pybullet_world, random_starts, start_p
 from nfmr_dlsmc.cli.common import (
     BATCH_ROBOT_BYTES,
     check_memory,
+    check_run_length,
     check_writable,
     json_ready,
+    non_negative_integer,
     number_triple,
     OneLineParser,
     positive_integer,
     positive_number,
-    RECORDED_STEP_BYTES,
     run_command,
     UsageError,
 )
@@ -55,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
                              '--hold-last seconds')
     parser.add_argument('--n', type=positive_integer, default=500,
                         help='number of starts (default 500)')
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seed', type=non_negative_integer, default=0)
     parser.add_argument('--x0-range', type=number_triple('dx,dy,dtheta [m,m,rad]', True),
                         default=(5.0, 5.0, math.pi), metavar='DX,DY,DTH',
                         help='starts uniform in +-DX [m], +-DY [m], +-DTH [rad] around the '
@@ -90,13 +91,11 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    steps = round(args.duration / 0.001)  # at the paper's period; a --params period is close
-    check_memory(max(args.n * BATCH_ROBOT_BYTES,
-                     min(args.jobs, args.n) * steps * RECORDED_STEP_BYTES),
-                 f'--n {args.n} starts of --duration {args.duration:g} s')
+    params = controller_params(load_params_file(args.params) if args.params else {})
+    check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.n))
+    check_memory(args.n * BATCH_ROBOT_BYTES, f'--n {args.n} starts')
     if args.plots:
         check_writable(args.plots, '--plots', directory=True)
-    params = controller_params(load_params_file(args.params) if args.params else {})
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')

@@ -12,12 +12,30 @@ from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
 from nfmr_dlsmc.ros.replay import replay, ReplayOptions
 
 
+#: The speed factors a replay takes: a bag of a day lasts at most three years, a day at
+#: least 86 s.
+RATE_RANGE = (1e-3, 1e3)
+
+
+def replay_rate(text: str) -> float:
+    """Argparse type: a speed factor within :data:`RATE_RANGE`."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    low, high = RATE_RANGE
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f'must be within {low:g}-{high:g}, got {text!r}')
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog='nfmr-replay',
                            description="Republish a rosbag2 MCAP bag's recorded bytes with "
                                        'their original timing.')
     parser.add_argument('bag', type=Path, help='bag directory or .mcap file')
-    parser.add_argument('--rate', type=float, default=1.0, help='speed factor (default 1)')
+    parser.add_argument('--rate', type=replay_rate, default=1.0,
+                        help=f'speed factor, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} (default 1)')
     parser.add_argument('--loop', action='store_true', help='start over at the end')
     parser.add_argument('--topics', nargs='+', metavar='T', help='replay only these topics')
     parser.add_argument('--start-offset', type=float, default=0.0, metavar='S',

@@ -5,6 +5,7 @@ The run itself is :mod:`nfmr_dlsmc.ros.launcher`'s.
 """
 
 import argparse
+import math
 from pathlib import Path
 import sys
 
@@ -54,11 +55,12 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    # Plain floats, not positive_number: an infinite duration or stall timeout is allowed.
-    for option, value in (('--duration', args.duration),
-                          ('--stall-timeout', args.stall_timeout)):
-        if not value > 0.0:
-            raise UsageError(f'{option} must be > 0, got {value}')
+    # A run has an end, which its figures need. The stall timeout may be infinite (never
+    # give up on a slow sim).
+    if not (math.isfinite(args.duration) and args.duration > 0.0):
+        raise UsageError(f'--duration must be a finite number > 0 [s], got {args.duration}')
+    if not args.stall_timeout > 0.0:
+        raise UsageError(f'--stall-timeout must be > 0, got {args.stall_timeout}')
     if not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:

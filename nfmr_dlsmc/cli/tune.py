@@ -19,9 +19,12 @@ from nfmr_dlsmc.analysis.outer_tuning import (
 from nfmr_dlsmc.cli.common import (
     add_output_file,
     check_output_file,
+    check_run_length,
     json_ready,
+    non_negative_integer,
     OneLineParser,
     positive_integer,
+    positive_number,
     run_command,
 )
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
@@ -40,8 +43,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='random starts of the final check')
     parser.add_argument('--x0-range', type=float, nargs=3, default=(5.0, 5.0, math.pi),
                         metavar=('DX', 'DY', 'DTH'))
-    parser.add_argument('--duration', type=float, default=100.0, help='final check [s]')
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--duration', type=positive_number, default=100.0,
+                        help='final check [s]')
+    parser.add_argument('--seed', type=non_negative_integer, default=0)
     parser.add_argument('--ratio', choices=RATIOS, default='fixed',
                         help='C1:C2 fixed, adapted to the initial error, or candidates of '
                              'both kinds (default: fixed)')
@@ -61,6 +65,7 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     check_output_file(args.out, args.force)
     params = controller_params(load_params_file(args.params) if args.params else {})
+    check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.finalists))
     report = tune_outer_gains(
         params, args.candidates, args.finalists, args.screen_starts, args.n, args.x0_range,
         args.duration, args.seed, args.ratio, args.jobs,

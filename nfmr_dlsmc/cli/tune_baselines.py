@@ -13,6 +13,7 @@ from nfmr_dlsmc.analysis.baseline_tuning import objective_name, tune, TUNED, wri
 from nfmr_dlsmc.cli.common import (
     add_output_file,
     check_output_file,
+    non_negative_integer,
     OneLineParser,
     positive_integer,
     run_command,
@@ -26,7 +27,7 @@ def _parser() -> argparse.ArgumentParser:
                     'search of their gains, written as a comparison gains file.')
     parser.add_argument('--budget', type=positive_integer, default=60,
                         help='gain sets per controller')
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seed', type=non_negative_integer, default=0)
     parser.add_argument('--controllers', nargs='+', choices=TUNED, default=list(TUNED))
     parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1)
     add_output_file(parser, 'comparison.yaml', 'gains file')

@@ -116,6 +116,9 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     duration = check_positive('duration', duration, 's')
     dt = config.dt
     n_steps = int(round(duration / dt))
+    if n_steps < 1:
+        raise ParameterError('duration', duration, f'must be at least one control period '
+                             f'({dt:g} s)', 's')
     o, i, lim = config.outer, config.inner, config.limits
     gain = {name: np.full(len(x0), float(getattr(o, name))) for name in PER_ROBOT_GAINS}
     outer = dict(outer or {})

@@ -169,6 +169,9 @@ def run(options: RunOptions) -> int:
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
+    if round(options.duration / params.dlsmc.dt) < 1:
+        raise ParameterError('--duration', options.duration, 'must be at least one control '
+                             f'period ({params.dlsmc.dt:g} s)', 's')
     _check_latency(settings.world.disturbance.odom_latency,
                    float(controller_flat.get('odom_timeout', ODOM_TIMEOUT_DEFAULT)))
     reservation = reserve_domain(options.domain)
