@@ -82,19 +82,6 @@ CSV_ERRORS = [
 ]
 
 
-@pytest.mark.parametrize('text, line, column, message', CSV_ERRORS)
-def test_a_bad_csv_file_is_refused_naming_the_line_and_column(tmp_path, text, line, column,
-                                                              message):
-    path = _write(tmp_path, 'warehouse.csv', text)
-    with pytest.raises(PathFileError) as caught:
-        load_path(path)
-    where = f'{path}' + (f' line {line}' if line else '') + (f', column {column}' if column
-                                                             else '')
-    assert str(caught.value).startswith(f'{where}: {message}')
-    error = caught.value
-    assert (error.file, error.line, error.column) == (str(path), line, column)
-
-
 def test_text_in_a_number_reads_as_the_brief_says(tmp_path):
     _write(tmp_path, 'warehouse.csv', 'x,y\n0,0\n1,0\n2,0\n3,abc\n')
     with pytest.raises(PathFileError) as caught:
@@ -120,15 +107,19 @@ YAML_ERRORS = [
 ]
 
 
-@pytest.mark.parametrize('text, line, column, message', YAML_ERRORS)
-def test_a_bad_yaml_file_is_refused_naming_the_line_and_column(tmp_path, text, line, column,
-                                                               message):
-    path = _write(tmp_path, 'route.yaml', text)
+@pytest.mark.parametrize('name, text, line, column, message',
+                         [('warehouse.csv', *case) for case in CSV_ERRORS]
+                         + [('route.yaml', *case) for case in YAML_ERRORS])
+def test_a_bad_file_is_refused_naming_the_line_and_column(tmp_path, name, text, line, column,
+                                                          message):
+    path = _write(tmp_path, name, text)
     with pytest.raises(PathFileError) as caught:
         load_path(path)
     where = f'{path}' + (f' line {line}' if line else '') + (f', column {column}' if column
                                                              else '')
     assert str(caught.value).startswith(f'{where}: {message}')
+    error = caught.value
+    assert (error.file, error.line, error.column) == (str(path), line, column)
 
 
 def test_a_missing_file_or_a_folder_is_refused_naming_it(tmp_path):

@@ -103,23 +103,21 @@ def _number(text: str, rule, rule_text: str) -> float:
 
 def non_negative_integer(text: str) -> int:
     """Argparse type: an integer >= 0 (a seed)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f'must be >= 0, got {text!r}')
-    return value
+    return _integer(text, 0)
 
 
 def positive_integer(text: str) -> int:
     """Argparse type: an integer >= 1."""
+    return _integer(text, 1)
+
+
+def _integer(text: str, least: int) -> int:
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'must be >= 1, got {text!r}')
+    if value < least:
+        raise argparse.ArgumentTypeError(f'must be >= {least}, got {text!r}')
     return value
 
 
