@@ -5,6 +5,7 @@ The replay itself is :mod:`nfmr_dlsmc.ros.replay`'s.
 """
 
 import argparse
+import math
 from pathlib import Path
 import sys
 
@@ -12,20 +13,21 @@ from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
 from nfmr_dlsmc.ros.replay import replay, ReplayOptions
 
 
-#: The speed factors a replay takes: a bag of a day lasts at most three years, a day at
-#: least 86 s.
+#: The finite speed factors a replay takes: a bag of a day lasts at most three years, a
+#: day at least 86 s; ``inf`` replays as fast as it can.
 RATE_RANGE = (1e-3, 1e3)
 
 
 def replay_rate(text: str) -> float:
-    """Argparse type: a speed factor within :data:`RATE_RANGE`."""
+    """Argparse type: a speed factor within :data:`RATE_RANGE`, or ``inf``."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
     low, high = RATE_RANGE
-    if not low <= value <= high:
-        raise argparse.ArgumentTypeError(f'must be within {low:g}-{high:g}, got {text!r}')
+    if not (low <= value <= high or value == math.inf):
+        raise argparse.ArgumentTypeError(f'must be within {low:g}-{high:g}, or inf (as fast '
+                                         f'as it can), got {text!r}')
     return value
 
 
@@ -35,7 +37,8 @@ def _parser() -> argparse.ArgumentParser:
                                        'their original timing.')
     parser.add_argument('bag', type=Path, help='bag directory or .mcap file')
     parser.add_argument('--rate', type=replay_rate, default=1.0,
-                        help=f'speed factor, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} (default 1)')
+                        help=f'speed factor, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g}, or '
+                             'inf: as fast as it can (default 1)')
     parser.add_argument('--loop', action='store_true', help='start over at the end')
     parser.add_argument('--topics', nargs='+', metavar='T', help='replay only these topics')
     parser.add_argument('--start-offset', type=float, default=0.0, metavar='S',
@@ -60,9 +63,6 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    # Plain floats, not positive_number: an infinite rate replays as fast as it can.
-    if not args.rate > 0.0:
-        raise UsageError(f'--rate must be > 0, got {args.rate}')
     if args.wait_for_subscribers < 0:
         raise UsageError(f'--wait-for-subscribers must be >= 0, got {args.wait_for_subscribers}')
     if args.start_offset < 0.0:
