@@ -167,6 +167,15 @@ def test_live_gain_change_takes_effect_at_the_next_tick(setup):
     assert peer.twists[-1][1].linear.x == pytest.approx(0.5)
 
 
+def test_an_integer_set_live_for_a_real_parameter_is_that_number(setup):
+    node, peer = setup()
+    result = node.set_parameters([Parameter('inner.k1', value=2)])[0]  # `ros2 param set` 2
+    assert result.successful, result.reason
+    assert node.get_parameter('inner.k1').value == 2.0
+    assert node.session.params.dlsmc.inner.k1 == 2.0
+    assert not node.set_parameters([Parameter('inner.k1', value='two')])[0].successful
+
+
 @pytest.mark.parametrize('name, value, reason', [
     ('inner.p1', 32, 'positive odd integer'),
     ('outer.q2', 35, '1 < outer.p2/outer.q2 < 2'),

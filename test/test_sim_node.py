@@ -263,6 +263,9 @@ def test_valid_live_changes_apply_at_the_next_step(ros_context):
         driver.drive(5, [0.0] * 4, [7.0] * 4)  # beyond the new bound: rejected
         wait_for(lambda: any('must be within +-5 rad/s (motors.max_wheel_speed)' in m
                              for m in driver.logs))
+        # An integer for a floating-point parameter, as `ros2 param set` sends `1`.
+        assert _set(client, 'command_timeout', 1).successful
+        wait_for(lambda: sim.gate.timeout == 1.0)  # the integer taken as 1.0 s
     finally:
         stop(sim, driver, executor)
 

@@ -59,6 +59,29 @@ class SchemaNodeMixin:
                                  'list (rclpy cannot declare one): leave it out, arrays '
                                  'default to []') from None
         self.parameter_values = _declare_parameters(self, params)
+        self.add_pre_set_parameters_callback(self._numbers_as_declared)
+
+    def _numbers_as_declared(self, parameters: list[Parameter]) -> list[Parameter]:
+        """
+        Take an integer set live for a floating-point parameter as that number.
+
+        ``ros2 param set /controller inner.k1 2`` sends an integer; a parameter file's
+        ``k1: 2`` is taken as 2.0 (:func:`_as_type`), and so is this.
+        """
+        taken = []
+        for parameter in parameters:
+            if self.has_parameter(parameter.name):
+                # The descriptor's type: an empty array is declared unset, without a value.
+                declared = Parameter.Type(self.describe_parameter(parameter.name).type)
+                if declared in (Parameter.Type.DOUBLE, Parameter.Type.DOUBLE_ARRAY):
+                    try:
+                        value = _as_type(parameter.name, parameter, declared)
+                    except ParameterError:
+                        value = None  # not a number: refused by rclpy's type check
+                    if value is not None:
+                        parameter = Parameter(parameter.name, declared, value)
+            taken.append(parameter)
+        return taken
 
 
 class SchemaNode(SchemaNodeMixin, Node):
