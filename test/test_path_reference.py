@@ -14,6 +14,7 @@ from nfmr_dlsmc.core.path_reference import (
     PathTrajectory,
 )
 from nfmr_dlsmc.core.schema import params_of
+from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
@@ -77,11 +78,14 @@ def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     declared = {p.name: p for p in params_of(PathProfile)}
     assert list(declared) == [f'trajectory.path.{n}' for n in (
         'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
-        'corner_radius', 'start_speed')]
+        'corner_radius', 'start_speed', 'curvature_rate')]
     assert [declared[f'trajectory.path.{n}'].default for n in (
         'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
-        'corner_radius', 'start_speed')] == [0.5, 0.5, 1.0, 0.3, 0.3, 0.3, 0.0]
+        'corner_radius', 'start_speed', 'curvature_rate')] == [0.5, 0.5, 1.0, 0.3, 0.3, 0.3,
+                                                               0.0, 2.5]
     assert declared['trajectory.path.lateral_acceleration'].unit == 'm/s^2'
+    assert declared['trajectory.path.curvature_rate'].unit == '1/(m*s)'
+    assert declared['trajectory.path.curvature_rate'].rule_text == '> 0'
     assert declared['trajectory.path.corner_radius'].rule_text == '>= 0'
     assert 'trajectory.path.speed' in (PathProfile.__doc__ or '')
 
@@ -93,6 +97,10 @@ def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     ({'acceleration': 'fast'}, "trajectory.path.acceleration = 'fast' m/s^2: must be a real"),
     ({'deceleration': -0.3}, 'trajectory.path.deceleration = -0.3 m/s^2: must be > 0'),
     ({'corner_radius': -0.1}, 'trajectory.path.corner_radius = -0.1 m: must be >= 0'),
+    ({'curvature_rate': 0.0}, 'trajectory.path.curvature_rate = 0.0 1/(m*s): must be > 0'),
+    ({'curvature_rate': -2.5}, 'trajectory.path.curvature_rate = -2.5 1/(m*s): must be > 0'),
+    ({'curvature_rate': math.nan}, 'trajectory.path.curvature_rate = nan 1/(m*s): must be a '
+                                   'finite'),
     ({'start_speed': 0.6}, 'trajectory.path.start_speed = 0.6 m/s: must be <= '
                            'trajectory.path.speed = 0.5 m/s'),
 ])
@@ -308,6 +316,63 @@ def _bound(traj, which):
     if which == 'lateral':
         return across.max() / profile.lateral_acceleration
     return (across / v[moving]).max() / profile.omega_max
+
+
+def _kappa_rate(traj, count=200001):
+    """Return dkappa/dt [1/(m s)] of the sampled reference, by finite differences."""
+    t = np.linspace(0.0, traj.duration, count)
+    _, _, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    v = np.hypot(xdot, ydot)
+    moving = v > 1e-2  # kappa = (v x a) / v^3 is ill-conditioned at rest
+    kappa = (xdot * yddot - ydot * xddot) / np.maximum(v, 1e-2) ** 3
+    return (np.diff(kappa) / np.diff(t))[moving[1:] & moving[:-1]]
+
+
+@pytest.mark.parametrize('points, profile', [
+    (AISLES, PathProfile()),
+    (AISLES, PathProfile(speed=1.0, corner_radius=0.7, curvature_rate=1.0)),
+    (ZIGZAG, PathProfile(speed=1.5, lateral_acceleration=2.0, omega_max=5.0,
+                         curvature_rate=8.0)),
+    (CIRCLE, PathProfile(speed=1.0, curvature_rate=0.5)),
+    (ZIGZAG[:4], PathProfile(corner_radius=0.0, curvature_rate=1.0)),
+])
+def test_the_curvature_changes_no_faster_than_the_curvature_rate(points, profile):
+    rate = np.abs(_kappa_rate(PathTrajectory.from_points(points, profile)))
+    assert rate.max() <= profile.curvature_rate * 1.02
+    assert rate.max() >= profile.curvature_rate * 0.9  # it binds, or it was not tested
+
+
+def test_the_curvature_rate_slows_the_reference_only_where_the_curvature_changes():
+    points = [(0.0, 0.0), (5.0, 0.0), (5.0, 5.0)]
+    free = PathTrajectory.from_points(points, PathProfile(curvature_rate=1e6))
+    bound = PathTrajectory.from_points(points, PathProfile(curvature_rate=1.0))
+    s = np.linspace(0.0, free.length, 1001)
+    assert bound.length == free.length
+    np.testing.assert_array_equal(np.array(bound.geometry(s)), np.array(free.geometry(s)))
+    assert np.abs(_kappa_rate(free)).max() > 10.0  # what the steering would have to follow
+    assert bound.duration > free.duration
+    for traj in (free, bound):  # both cruise on the straight legs
+        x, y, xdot, ydot = traj.sample(traj.duration / 4.0)
+        assert math.hypot(xdot, ydot) == pytest.approx(0.5) and abs(y) < 1e-9
+
+
+def test_the_default_curvature_rate_keeps_double_ackermann_steering_slow():
+    # The robot of Table 1, with corners its inner wheels can follow (module docstring).
+    geometry, mode = RobotGeometry(), SteerMode()
+    half_l, half_t = geometry.wheelbase / 2.0, geometry.track / 2.0
+    profile = PathProfile(speed=0.8, omega_max=1.59, corner_radius=0.7)
+    traj = PathTrajectory.from_points(AISLES, profile)
+    t = np.linspace(0.0, traj.duration, 100001)
+    _, _, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    v = np.hypot(xdot, ydot)
+    omega = (xdot * yddot - ydot * xddot) / np.maximum(v, 1e-9) ** 2  # v kappa
+    steer = steer_angle_series(v, omega, geometry, mode)
+    rate = np.abs(np.diff(steer, axis=0)).max(axis=1) / np.diff(t)
+    bound = (half_l ** 2 + half_t ** 2) / half_l * profile.curvature_rate
+    assert bound == pytest.approx(1.51, abs=0.01)  # [rad/s], the joints turn up to 20
+    assert 0.5 * bound < rate.max() <= 1.02 * bound
 
 
 @pytest.mark.parametrize('name', [n for n in CASES if n != 'timed'])

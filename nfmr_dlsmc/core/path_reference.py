@@ -23,11 +23,38 @@ built in four steps:
    (:class:`scipy.interpolate.CubicSpline`).
    With ``corner_radius = 0`` the spline goes through the points themselves instead.
 4. Untimed: the speed v(s) is the least of the cruise speed, sqrt(lateral_acceleration /
-   |kappa|) and omega_max / |kappa|, then limited by a forward pass with ``acceleration``
-   from ``start_speed`` and a backward pass with ``deceleration`` to rest at the last point.
-   Between two samples of the dense grid the acceleration is constant, so time follows in
-   closed form, dt = 2 ds / (v_k + v_k+1), finite with v = 0 at the ends. Timed: s(t) is a
-   monotone cubic through the points' (t_i, s_i), at rest at the first and last stamps.
+   |kappa|), omega_max / |kappa| and curvature_rate / |dkappa/ds|, then limited by a forward
+   pass with ``acceleration`` from ``start_speed`` and a backward pass with ``deceleration``
+   to rest at the last point. Between two samples of the dense grid the acceleration is
+   constant, so time follows in closed form, dt = 2 ds / (v_k + v_k+1), finite with v = 0 at
+   the ends. Timed: s(t) is a monotone cubic through the points' (t_i, s_i), at rest at the
+   first and last stamps (none of the speed limits applies).
+
+The curvature rate. A robot that steers its wheels turns them as the curvature of its path
+changes, at dkappa/dt = v dkappa/ds. Where a corner's arc meets a straight, kappa rises
+from 0 to 1 / radius within a few Gaussian widths (:data:`SMOOTHING` of the radius), which
+at cruise speed would ask the steering for tens of rad/s: more than the joints and the
+law's bandwidth follow, and the robot falls behind in every corner. The speed profile
+therefore also keeps v |dkappa/ds| <= :attr:`PathProfile.curvature_rate`: it slows the
+reference only where the curvature changes, and leaves the geometry (the rounding, the arc
+length, how far each point is cut) as it is. A longer, clothoid-like transition would not:
+for the same least radius it shifts the arc away from the corner (by about l^2 / (24 radius)
+for a transition of length l) and cuts the corner by more than the rounding promises.
+
+To choose it, with double Ackermann steering (front and rear wheels turned opposite, P at
+the chassis centre, wheelbase L, track T) a wheel at (+-L/2, +-T/2) points at
+atan((L/2) kappa / (1 -+ (T/2) kappa)); it turns at dkappa/dt times (L/2) at kappa = 0, and
+at most ((L/2)^2 + (T/2)^2) / (L/2) times (an inner wheel, at kappa = (T/2) / ((L/2)^2 +
+(T/2)^2)). Divide the steer rate the joints should keep to by that length. For the robot of
+``config/robot_case1.yaml`` (L = 0.89 m, T = 0.53 m: 0.60 m) the default 2.5 1/(m s) asks
+at most 1.5 rad/s of its joints (limited to 20 rad/s); on the simulated chassis, along the
+warehouse loop at 0.8 m/s with corners of 0.7 m, they turned at 2.3 rad/s at most in the
+corners, the law's corrections included.
+
+The same geometry bounds the corner radius such a chassis can follow: its inner wheels point
+at atan((L/2) / (radius - T/2)), 85 deg for that robot at the default radius of 0.3 m, where
+any correction of the law turns them past 90 deg and flips them (14 to 25 mm of error on
+the simulated chassis, whatever the curvature rate). Give it 0.7 m or more there (46 deg).
 
 Before the start (t < 0, or before the first stamp) the reference moves along the start
 tangent at the start speed (at rest with the default ``start_speed = 0``: the first point);
@@ -72,6 +99,8 @@ _TRUNCATE = 6.0
 _MAX_ENLARGEMENT = 1.5
 #: Largest |curvature| the speed profile takes [1/m]: finite for any spline.
 _MAX_CURVATURE = 1e6
+#: Largest |dkappa/ds| the speed profile takes [1/m^2]: finite for any spline.
+_MAX_CURVATURE_RATE = 1e12
 #: Least sum of two neighbouring speeds of the profile [m/s]: a finite time step.
 _MIN_SPEED_SUM = 1e-9
 
@@ -118,9 +147,12 @@ class PathProfile:
     corner_radius: float = param(0.3, 'm', 'least radius a corner is rounded with (gentle '
                                  'bends more, short segments less); 0: only the spline '
                                  'through the points rounds them', NON_NEGATIVE)
-    start_speed: float = param(0.0, 'm/s', 'speed at the first point (less if stopping at '
-                               'the last point needs it)', NON_NEGATIVE,
+    start_speed: float = param(0.0, 'm/s', 'speed at the first point (less if the limits '
+                               'there or stopping at the last point need it)', NON_NEGATIVE,
                                also='<= trajectory.path.speed')
+    curvature_rate: float = param(2.5, '1/(m*s)', 'largest |dkappa/dt| = v |dkappa/ds|; '
+                                  'double Ackermann steering then turns at most ((L/2)^2 + '
+                                  '(T/2)^2) / (L/2) times this, in rad/s', POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -201,7 +233,7 @@ class PathTrajectory:
         s = arc
         curve = CubicSpline(s, dense, bc_type='natural')
         if stamps is None:
-            timing = _speed_profile(s, _bend(curve, s), profile)
+            timing = _speed_profile(s, _bend(curve, s), _bend_rate(curve), profile)
         else:
             timing = _timed(stamps, vertex_s)
         start, end = curve(0.0, 1), curve(s[-1], 1)
@@ -562,6 +594,33 @@ def _bend(curve, s):
     return at
 
 
+def _bend_rate(curve):
+    """
+    Return the largest |dkappa/ds| [1/m^2] of ``curve`` next to each of its breakpoints.
+
+    On each interval of the spline it is taken at both ends and halfway; a breakpoint gets
+    the larger of the intervals beside it, so that, as with :func:`_bend`, the limit of a
+    sample holds on the intervals beside it too.
+    """
+    c = np.asarray(curve.c, dtype=float)  # (4, n, 2): r(u) = c0 u^3 + c1 u^2 + c2 u + c3
+    width = np.diff(curve.x)
+    rate = np.zeros(len(width))
+    for share in (0.0, 0.5, 1.0):
+        u = (share * width)[:, None]
+        first = (3.0 * c[0] * u + 2.0 * c[1]) * u + c[2]
+        second = 6.0 * c[0] * u + 2.0 * c[1]
+        third = 6.0 * c[0]
+        norm = np.maximum(np.hypot(first[:, 0], first[:, 1]), 1e-9)
+        cross = first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]
+        dot = np.einsum('ij,ij->i', first, second)
+        turn = first[:, 0] * third[:, 1] - first[:, 1] * third[:, 0]
+        with np.errstate(over='ignore', invalid='ignore'):
+            here = (turn / norm ** 3 - 3.0 * cross * dot / norm ** 5) / norm
+        rate = np.maximum(rate, np.abs(np.nan_to_num(here, nan=_MAX_CURVATURE_RATE)))
+    rate = np.minimum(rate, _MAX_CURVATURE_RATE)
+    return np.maximum(np.r_[rate, 0.0], np.r_[0.0, rate])
+
+
 def _curvature(curve, s):
     """Return the signed curvature kappa(s) [1/m] of ``curve``, bounded for the profile."""
     first, second = curve(s, 1), curve(s, 2)
@@ -582,17 +641,20 @@ def _rows(coefficients) -> np.ndarray:
 
 # -- the timing -----------------------------------------------------------------------------
 
-def _speed_profile(s, bend, profile: PathProfile) -> PPoly:
+def _speed_profile(s, bend, bend_rate, profile: PathProfile) -> PPoly:
     """
-    Return s(t) for the speed limits of ``profile`` along the samples ``s``, |kappa| ``bend``.
+    Return s(t) for the speed limits of ``profile`` along the samples ``s``.
 
-    v^2 is limited at each sample by the cruise speed, lateral acceleration and yaw rate,
-    then by a forward pass (acceleration, from the start speed) and a backward pass
-    (deceleration, to rest at the end); both passes are running minima of v^2 +- 2 a s.
+    ``bend`` is |kappa| [1/m] and ``bend_rate`` |dkappa/ds| [1/m^2] at the samples. v^2 is
+    limited at each sample by the cruise speed, lateral acceleration, yaw rate and
+    curvature rate, then by a forward pass (acceleration, from the start speed) and a
+    backward pass (deceleration, to rest at the end); both passes are running minima of
+    v^2 +- 2 a s.
     """
     with np.errstate(divide='ignore', over='ignore'):
         limit = np.minimum(profile.lateral_acceleration / bend,
                            (profile.omega_max / bend) ** 2)
+        limit = np.minimum(limit, (profile.curvature_rate / bend_rate) ** 2)
     limit = np.minimum(limit, profile.speed ** 2)
     limit[0] = min(profile.start_speed ** 2, limit[0])
     ramp = 2.0 * profile.acceleration * s
