@@ -150,6 +150,13 @@ class CommandGate:
     """
     Thread-safe holder of the latest valid per-wheel command.
 
+    A controller may publish both forms, per-wheel arrays and a ``cmd_vel`` twist, for each
+    step (ours does). Per-wheel commands are the more exact (no mapping in the sim), so
+    while they come a twist is ignored: it neither replaces them nor releases a lockstep
+    step on its own — otherwise which message arrives first would decide what a step
+    applies, and lockstep runs would not repeat. A twist counts again once no per-wheel
+    command has come for ``timeout``.
+
     Parameters
     ----------
     timeout : float
@@ -174,6 +181,7 @@ class CommandGate:
         self._wheels = None
         self._new_steer = self._new_wheels = self._new_twist = self._new_reject = False
         self._last_valid = None  # sim time [s] of the last valid command
+        self._last_per_wheel = None  # sim time [s] of the last accepted per-wheel pair
         self._fault = 'no command received yet'
         self._fault_kind = None  # Rejection.kind while the fault is a rejection
         self._reported = None
@@ -210,11 +218,18 @@ class CommandGate:
         else:
             self._wheels, self._new_wheels = checked, True
         if self._steer is not None and self._wheels is not None:
+            self._last_per_wheel = now
             self._accept(now)
 
     def offer_twist(self, vx: float, vy: float, wz: float, now: float) -> None:
-        """Take a body twist of P (m/s, m/s, rad/s), mapped through the steering geometry."""
+        """
+        Take a body twist of P (m/s, m/s, rad/s), mapped through the steering geometry.
+
+        Ignored while per-wheel commands come (within ``timeout`` of the last pair).
+        """
         with self._cond:
+            if self._last_per_wheel is not None and now - self._last_per_wheel <= self.timeout:
+                return
             mapped = map_twist(vx, vy, wz, self.geometry, self.offset, self.max_wheel_speed,
                                hold_steer=self._steer)
             if isinstance(mapped, Rejection):

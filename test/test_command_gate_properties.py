@@ -176,3 +176,22 @@ def test_live_limits_apply_to_the_next_command_and_are_validated():
     assert command is None and 'data[0] (front_left) = 7.0 rad/s: must be within +-5' in report
     with pytest.raises(ValueError, match='motors.max_wheel_speed = nan rad/s'):
         gate.configure(0.2, math.nan)
+
+
+def test_while_per_wheel_commands_come_a_twist_neither_replaces_them_nor_releases_a_step():
+    gate = CommandGate(0.1, GEOMETRY, 0.0, 50.0)
+    gate.offer_twist(0.5, 0.0, 0.0, 0.0)  # twists alone drive the robot
+    assert gate.wait_for_step_command(0.0)
+    gate.take(0.0)
+    steer, wheels = [0.1] * 4, [3.0] * 4
+    gate.offer_steer(steer, 0.001)
+    gate.offer_wheels(wheels, 0.001)
+    gate.take(0.001)
+    gate.offer_twist(0.5, 0.0, 1.0, 0.002)  # the same step's twist, first to arrive
+    assert not gate.wait_for_step_command(0.0)  # the step waits for its per-wheel pair
+    (held_steer, held_wheels), _ = gate.take(0.002)
+    np.testing.assert_array_equal(held_steer, steer)
+    np.testing.assert_array_equal(held_wheels, wheels)
+    # No per-wheel command for longer than the timeout: twists count again.
+    gate.offer_twist(0.5, 0.0, 0.0, 0.2)
+    assert gate.wait_for_step_command(0.0)

@@ -81,6 +81,7 @@ RUN_TOPICS = {
 LATCHED_TOPICS = ('/reference_path',)
 STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
 STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
+LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
 TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
 ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
@@ -221,7 +222,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
                                  run_dir),
                     _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
-                                 _controller_args(config, options), run_dir)]
+                                 _controller_args(config, options, settings.world),
+                                 run_dir)]
         controller = _ControllerLifecycle(manager, clock, children, stop)
         # The sim starts stepping once the controller subscribes to odometry: when active.
         controller.wait_until_up()
@@ -263,8 +265,18 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
 
 
 def _sim_args(config: Path, options: RunOptions) -> list[str]:
-    """Return the sim's ROS arguments."""
+    """
+    Return the sim's ROS arguments.
+
+    In lockstep a step waits for its command as long as the run waits for simulated time
+    to move (``--stall-timeout``): a step taken without its command, because a busy machine
+    held the controller back longer than the file's ``lockstep_timeout``, would make the
+    run no longer lockstep.
+    """
+    wait = min(options.stall_timeout, LONGEST_LOCKSTEP_WAIT)
     return ['--ros-args', '--params-file', str(config), '-p', f'mode:={options.mode}',
+            *(('-p', f'lockstep_timeout:={float(wait)!r}') if options.mode == 'lockstep'
+              else ()),
             '-p', f"gui:={'true' if options.gui else 'false'}",
             '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
             '-p', f'max_time:={float(options.duration)!r}',
@@ -277,7 +289,7 @@ def _sensing_values(preset: str | None) -> dict:
     return {} if preset is None else dict(SENSING_PRESETS[preset])
 
 
-def _controller_args(config: Path, options: RunOptions) -> list[str]:
+def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
     """Return the controller's ROS arguments: no autostart, the path over the run."""
     # On the sim's time in both modes: the trajectory runs on simulated time, so a sim
     # slower than real time slows the run down instead of breaking it.
@@ -285,8 +297,13 @@ def _controller_args(config: Path, options: RunOptions) -> list[str]:
             '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true']
     if options.mode == 'realtime':
         return [*args, '-p', 'tick_source:=clock']
-    # A tick per simulated step, whatever the odometry's rate; odometry ages on simulated
-    # time, so a slow step on a busy machine is no fault.
+    odometry = world.disturbance
+    if odometry.odom_latency == 0.0 and odometry.odom_rate * world.physics_dt >= 1.0:
+        # Odometry of every step, on time: a tick per message, which is the step's own
+        # (a tick per /clock could come before the step's odometry has: runs would differ).
+        return [*args, '-p', 'tick_source:=odom']
+    # Slower or late odometry: a tick per simulated step all the same; odometry ages on
+    # simulated time, so a slow step on a busy machine is no fault.
     return [*args, '-p', 'tick_source:=sim_clock']
 
 
@@ -455,8 +472,9 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     ------
     RunError
         A child dies, or simulated time stands still for ``stall_timeout`` [s, wall
-        clock] (counted from the start, so it also covers a sim that never starts
-        stepping).
+        clock] once the sim has stepped; before its first step, for
+        ``max(stall_timeout, STARTUP_TIMEOUT)`` (a busy machine may take seconds to start
+        the nodes; a sim that never steps is still caught).
 
     """
     last_print = 0.0
@@ -477,7 +495,8 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
             last_progress, progress_time = now, sim_t
             if first is None and sim_t > 0.0:
                 first = (now, sim_t)
-        elif now - last_progress > stall_timeout:
+        elif now - last_progress > (stall_timeout if first is not None
+                                    else max(stall_timeout, STARTUP_TIMEOUT)):
             sim = children[0]
             raise RunError(f'the run stalled: simulated time has stayed at {sim_t:.3f} s for '
                            f'{now - last_progress:.1f} s (--stall-timeout {stall_timeout:g} s); '
