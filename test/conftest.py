@@ -6,9 +6,15 @@ own (so that a run of another session never takes it).
 """
 
 import os
+import signal
 
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 import pytest
+
+# A shell starting the suite in the background without job control has it ignore SIGINT,
+# and every command it starts would inherit that: the tests that stop a command with
+# SIGINT need the default, Python's KeyboardInterrupt.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 if 'ROS_DOMAIN_ID' not in os.environ:
