@@ -155,7 +155,10 @@ class CommandGate:
     while they come a twist is ignored: it neither replaces them nor releases a lockstep
     step on its own — otherwise which message arrives first would decide what a step
     applies, and lockstep runs would not repeat. A twist counts again once no per-wheel
-    command has come for ``timeout``.
+    command has come for ``timeout``. A pair is two per-wheel arrays: a wheel array that
+    follows a twist does not pair with the twist's mapped steering (a controller that
+    answers with a twist and wheel speeds only, as ours does before its first odometry,
+    would otherwise have its next twist ignored and its lockstep step never released).
 
     Parameters
     ----------
@@ -179,6 +182,7 @@ class CommandGate:
         self.configure(timeout, max_wheel_speed)
         self._steer = None
         self._wheels = None
+        self._steer_from_twist = False  # whether _steer is a twist's mapping
         self._new_steer = self._new_wheels = self._new_twist = self._new_reject = False
         self._last_valid = None  # sim time [s] of the last valid command
         self._last_per_wheel = None  # sim time [s] of the last accepted per-wheel pair
@@ -215,9 +219,10 @@ class CommandGate:
             return
         if steer:
             self._steer, self._new_steer = checked, True
+            self._steer_from_twist = False
         else:
             self._wheels, self._new_wheels = checked, True
-        if self._steer is not None and self._wheels is not None:
+        if self._steer is not None and self._wheels is not None and not self._steer_from_twist:
             self._last_per_wheel = now
             self._accept(now)
 
@@ -236,6 +241,7 @@ class CommandGate:
                 self._reject(mapped)
                 return
             self._steer, self._wheels = mapped
+            self._steer_from_twist = True
             self._new_twist = True
             self._accept(now)
 

@@ -195,3 +195,19 @@ def test_while_per_wheel_commands_come_a_twist_neither_replaces_them_nor_release
     # No per-wheel command for longer than the timeout: twists count again.
     gate.offer_twist(0.5, 0.0, 0.0, 0.2)
     assert gate.wait_for_step_command(0.0)
+
+
+def test_wheel_speeds_after_a_twist_do_not_pair_with_its_steering():
+    # A controller before its first odometry answers each lockstep step with zero wheel speeds
+    # and a zero twist (no steering yet to hold); the two arrive in either order, and every
+    # step must be released.
+    gate = CommandGate(0.1, GEOMETRY, 0.0, 50.0)
+    gate.offer_twist(0.0, 0.0, 0.0, 0.0)
+    gate.offer_wheels([0.0] * 4, 0.0)
+    assert gate.wait_for_step_command(0.0)
+    gate.take(0.0)
+    gate.offer_wheels([0.0] * 4, 0.001)  # this step's wheels first, then its twist
+    gate.offer_twist(0.0, 0.0, 0.0, 0.001)
+    assert gate.wait_for_step_command(0.0)
+    command, _ = gate.take(0.001)
+    np.testing.assert_array_equal(command[1], np.zeros(4))
