@@ -218,16 +218,21 @@ def test_autostart_reaches_active_by_itself():
     context = new_context()
     client = Client(context)
     spinner = Spinner(context, client)
+    failure = None
     try:
         client.wait_until_answered()
         wait_for(lambda: client.state() == 'active', what='the active state')
         wait_for(lambda: any(s.values[0].value == 'active' for d in client.diagnostics
                              for s in d.status), what='diagnostics of the active state')
+    except AssertionError as exc:
+        failure = exc
     finally:
         spinner.close()
         rclpy.try_shutdown(context=context)
         proc.terminate()
         output = proc.communicate(timeout=10)[0]
+    assert failure is None, (f'{failure}; the controller (exit {proc.returncode}) '
+                             f'printed:\n{output}')
     assert 'Traceback' not in output, output
 
 

@@ -11,6 +11,7 @@ import time
 
 from nfmr_dlsmc.analysis.run_setup import pybullet_world
 from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.metrics import format_metric, HOLD_ROWS, simulation_metrics
@@ -23,11 +24,17 @@ from nfmr_dlsmc.runtime.params import (
     ControllerParams,
     load_gain_blocks,
     load_params_file,
+    PATH,
 )
 from nfmr_dlsmc.runtime.share import shipped_config
 
 #: Table 2, DLSMC row, and section 4.2 (Case 1, x0 = (1, 4, 0)).
 PAPER_CASE1 = {'iae': 13.5757, 'ise': 37.1057, 'std': 0.5938, 't_conv': 7.1}
+#: Case 1's start pose (x [m], y [m], theta [rad]) and the paper's run length [s].
+CASE1_START = (1.0, 4.0, 0.0)
+PAPER_DURATION = 100.0
+#: How long a run along a path goes on after its reference has stopped [s]: time to arrive.
+PATH_MARGIN = 5.0
 #: The rows of :func:`format_table`: (label, metrics key).
 _TABLE_ROWS = (
     ('IAE of distance [m*s]', 'iae'), ('ISE of distance [m^2*s]', 'ise'),
@@ -79,17 +86,21 @@ class Evaluation:
     disturbance: str
 
 
-def load_evaluation(plant: str, controller_name: str, x0, duration: float, disturbance: str,
-                    params_file=None, gains_file=None, dt: float | None = None,
-                    trajectory_name: str | None = None,
-                    sensing: str | None = None) -> Evaluation:
+def load_evaluation(plant: str, controller_name: str, x0, duration: float | None,
+                    disturbance: str, params_file=None, gains_file=None,
+                    dt: float | None = None, trajectory_name: str | None = None,
+                    sensing: str | None = None, path=None) -> Evaluation:
     """
     Load and check one scenario; nothing is simulated yet.
 
     Parameters
     ----------
-    plant, controller_name, x0, duration, disturbance
+    plant, controller_name, disturbance
         As in :class:`Evaluation`.
+    x0 : tuple of 3 floats or None
+        Initial pose; None: a path's start pose, else :data:`CASE1_START`.
+    duration : float or None
+        [s]; None: a path's duration and :data:`PATH_MARGIN`, else :data:`PAPER_DURATION`.
     params_file : str or Path, optional
         Controller parameter file (ROS 2 layout, node ``controller``); on pybullet its
         ``sim`` section builds the world.
@@ -102,6 +113,9 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float, distu
         A reference with its default parameters instead of the file's trajectory.
     sensing : str, optional
         A sensing preset instead of the file's odometry (pybullet only).
+    path : str or Path, optional
+        A path file to follow instead of the file's trajectory (``trajectory.name: path``);
+        the controller stops at its end.
 
     Raises
     ------
@@ -114,6 +128,8 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float, distu
     flat = load_params_file(params_file) if params_file else {}
     if dt is not None:
         flat['control_rate'] = 1.0 / dt
+    if path is not None:
+        flat.update({'trajectory.name': PATH, 'trajectory.path.file': str(path)})
     params = controller_params(flat)
     trajectory = (params.trajectory if trajectory_name is None
                   else make_trajectory(trajectory_name))
@@ -123,6 +139,11 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float, distu
         blocks = load_gain_blocks(gains_file or shipped_config('comparison.yaml'))
         controller = build_controller(controller_name, blocks.get(controller_name),
                                       params.dlsmc.limits, params.dlsmc.dt)
+    controller = with_arrival(controller, trajectory, params.arrival)
+    if x0 is None:  # a path from its start, else Case 1's start
+        x0 = getattr(trajectory, 'start_pose', CASE1_START)
+    if duration is None:  # a path until its end and a little more, else the paper's 100 s
+        duration = getattr(trajectory, 'duration', PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
     if sensing is not None and plant != 'pybullet':
         raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
                              'kinematic model has no odometry')
@@ -195,10 +216,12 @@ def evaluate(evaluation: Evaluation, hold_from: float,
                     evaluation.trajectory, evaluation.x0, evaluation.duration,
                     evaluation.world, disturbance_by_name(evaluation.disturbance), progress)
     cpu_s = time.process_time() - start
-    result = simulation_metrics(sim, hold_from).as_dict()
+    result = simulation_metrics(sim, hold_from,
+                                getattr(evaluation.trajectory, 'end_pose', None)).as_dict()
     result['scenario'] = {
         'controller': evaluation.controller_name, 'plant': evaluation.plant,
-        'trajectory': type(evaluation.trajectory).__name__.lower(),
+        'trajectory': PATH if hasattr(evaluation.trajectory, 'end_pose')
+        else type(evaluation.trajectory).__name__.lower(),
         'x0': list(evaluation.x0), 'duration': evaluation.duration, 'dt': dt,
         'disturbance': evaluation.disturbance, 'steps': len(sim.t),
         'cpu_s': round(cpu_s, 4)}
@@ -233,4 +256,10 @@ def format_table(result: dict, paper: dict | None) -> str:
             diff = '' if value is None else f'{100.0 * (value - paper[key]) / paper[key]:+.1f}%'
             line += f' {paper[key]:>10.4f} {diff:>8}'
         lines.append(line)
+    if result.get('arrival'):
+        lines += [f"{'end of the path':<46} {result['arrival']:>12}"]
+        lines += [f'{label:<46} {format_metric(result[key]):>12}' for label, key in (
+            ('stopped at [s]', 'arrival_time'),
+            ('distance to the goal at rest [m]', 'arrival_position_error'),
+            ('|heading error| at the goal at rest [rad]', 'arrival_yaw_error'))]
     return '\n'.join(lines)

@@ -39,7 +39,7 @@ class PurePursuitController(SingleLoopController):
         distance = max(math.hypot(dx, dy), 1e-9)
         e1, _, _ = robot_frame_errors(x, y, theta, x_d, y_d, ref.theta_r)
         v = ref.v_r + g.k_v * e1
-        driven = min(max(v, self._limits.v_min), self._limits.v_max)
+        driven = min(max(v, self.speed_floor(ref.v_r)), self._limits.v_max)
         self.theta_d = bearing
         return v, 2.0 * driven * math.sin(alpha) / distance
 

@@ -76,7 +76,7 @@ class SingleLoopController(SaturatedController):
         self.ref.update(xdot_d, ydot_d, dt)
         v_raw, omega_raw = self._law(x, y, theta, x_d, y_d, dt)
         v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
-            v_raw, omega_raw, self._limits)
+            v_raw, omega_raw, self._limits, self.speed_floor(self.ref.v_r))
         self.x_e, self.y_e = x - x_d, y - y_d
         self.theta_e = (wrap_angle(theta - self.theta_d) if math.isfinite(self.theta_d)
                         else math.nan)

@@ -42,14 +42,19 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--gains', metavar='FILE.yaml', default=None,
                         help='comparison gains file for a controller other than the DLSMC '
                              '(default config/comparison.yaml)')
-    parser.add_argument('--trajectory', choices=list(TRAJECTORY_TYPES), default=None,
-                        help='reference with its default parameters (default: the '
-                             "--params file's trajectory, else sine)")
-    parser.add_argument('--x0', type=number_triple('x,y,theta [m,m,rad]'),
-                        default=(1.0, 4.0, 0.0),
-                        help='initial pose x,y,theta [m,m,rad] (default 1,4,0)')
-    parser.add_argument('--duration', type=positive_number, default=100.0,
-                        help='[s] (default 100)')
+    reference = parser.add_mutually_exclusive_group()
+    reference.add_argument('--trajectory', choices=list(TRAJECTORY_TYPES), default=None,
+                           help='reference with its default parameters (default: the '
+                                "--params file's trajectory, else sine)")
+    reference.add_argument('--path', metavar='FILE', default=None,
+                           help='follow the points of a path file (CSV x,y or t,x,y; YAML '
+                                'list) timed by trajectory.path.* of --params, and stop at '
+                                'its end (e.g. config/paths/warehouse_loop.csv)')
+    parser.add_argument('--x0', type=number_triple('x,y,theta [m,m,rad]'), default=None,
+                        help="initial pose x,y,theta [m,m,rad] (default: a path's start, "
+                             'else 1,4,0)')
+    parser.add_argument('--duration', type=positive_number, default=None,
+                        help="[s] (default: a path's duration and 5 s to arrive, else 100)")
     parser.add_argument('--dt', type=positive_number, default=None,
                         help='control and integration step [s] (default 0.001, or '
                              '1/control_rate of --params)')
@@ -84,13 +89,14 @@ def _run(args) -> int:
                          'gains come from --params')
     evaluation = load_evaluation(args.plant, args.controller, args.x0, args.duration,
                                  args.disturbance, args.params, args.gains, args.dt,
-                                 args.trajectory, args.sensing)
-    check_run_length(args.duration, evaluation.params.dlsmc.dt)
+                                 args.trajectory, args.sensing, args.path)
+    duration = evaluation.duration
+    check_run_length(duration, evaluation.params.dlsmc.dt)
     show = args.plant == 'pybullet' and sys.stderr.isatty()
 
     def progress(t):
         if show:
-            print(f'\rpybullet {t:6.1f} / {args.duration:g} s', end='', file=sys.stderr,
+            print(f'\rpybullet {t:6.1f} / {duration:g} s', end='', file=sys.stderr,
                   flush=True)
 
     try:
@@ -103,7 +109,7 @@ def _run(args) -> int:
     else:
         print(format_table(result, paper_values(evaluation)))
         print(f"{result['scenario']['steps']} steps in {cpu_s:.2f} s CPU "
-              f'({args.duration / max(cpu_s, 1e-9):.1f}x real time)')
+              f'({duration / max(cpu_s, 1e-9):.1f}x real time)')
     return 0
 
 

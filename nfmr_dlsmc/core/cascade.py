@@ -31,7 +31,8 @@ class CascadeController(SaturatedController):
        with this step's saturated v;
     4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
        attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
-    5. saturation v in [v_min, v_max], |omega| <= omega_max;
+    5. saturation v in [v_min, v_max], |omega| <= omega_max (v_min lowered to a slower
+       reference's speed with ``follow_slow_reference``);
     6. optionally (``omega_tau`` > 0) a first-order low-pass of omega from the second step
        on, time constant ``omega_tau`` (1 - abs(s_theta) / ``omega_band``) [s] (none from
        abs(s_theta) >= ``omega_band`` [rad] on).
@@ -116,8 +117,12 @@ class CascadeController(SaturatedController):
         theta_d = math.atan2(u_y, u_x)
         v_raw = math.hypot(u_x, u_y)
         limits = self._limits
-        v = limits.v_min if v_raw < limits.v_min else (
-            limits.v_max if v_raw > limits.v_max else v_raw)
+        v_min = limits.v_min
+        if self.follow_slow_reference:  # speed_floor written out (hot path)
+            v_ref = math.hypot(xdot_d, ydot_d)
+            if v_ref < v_min:
+                v_min = v_ref
+        v = v_min if v_raw < v_min else (limits.v_max if v_raw > limits.v_max else v_raw)
         # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
         if self._analytic:
             udot_x, udot_y = self.outer.input_rate(v * math.cos(theta) - xdot_d,

@@ -8,8 +8,10 @@ uneven (a recorded real-time run), ``dt`` may be an array: each sample's own dur
 """
 
 from dataclasses import asdict, dataclass
+import math
 
 from nfmr_dlsmc.core.angles import wrap_angles
+from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
 import numpy as np
 
 __all__ = ['COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria', 'HOLD_FROM',
@@ -146,6 +148,17 @@ class TrackingMetrics:
     hold_steer_joint_rate_max : float or None
         Largest measured steer joint rate [rad/s] (plants with steer joints).
 
+    Arriving at the end of a path (:mod:`nfmr_dlsmc.core.arrival`; None for a reference
+    without an end, or where the run did not end):
+
+    arrival : str or None
+        How the run ended (``arrived``, ``passed the goal``, ``goal timeout``).
+    arrival_time : float or None
+        When it ended [s].
+    arrival_position_error, arrival_yaw_error : float or None
+        Distance [m] and |heading difference| [rad] of the robot to the goal at the last
+        sample, standing still.
+
     """
 
     iae: float
@@ -173,6 +186,10 @@ class TrackingMetrics:
     hold_omega_saturated: float | None = None
     hold_steer_rate_max: float | None = None
     hold_steer_joint_rate_max: float | None = None
+    arrival: str | None = None
+    arrival_time: float | None = None
+    arrival_position_error: float | None = None
+    arrival_yaw_error: float | None = None
 
     def as_dict(self) -> dict:
         """Return the metrics as a JSON-ready dict."""
@@ -198,17 +215,19 @@ def finite_or_none(value: float) -> float | None:
 
 
 def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
-                 omega_saturated=None, steer=None, steer_joint_velocity=None) -> dict:
+                 omega_saturated=None, steer=None, steer_joint_velocity=None,
+                 until: float = math.inf) -> dict:
     """
     Return the figures of holding the path over the samples with t >= ``hold_from`` [s].
 
     They are the ``hold_*`` fields of :class:`TrackingMetrics` as a dict (see there); a
     figure is None when no sample lies in the window or its input is missing
     (``omega_saturated``: the controller's per-tick flag that omega was clipped to its
-    limit; ``steer`` (N, 4) [rad]; ``steer_joint_velocity`` (N, 4) [rad/s]).
+    limit; ``steer`` (N, 4) [rad]; ``steer_joint_velocity`` (N, 4) [rad/s]). The window
+    ends before ``until`` [s], when a run that arrives at its goal ended.
     """
     t = np.asarray(t, dtype=float)
-    after = t >= hold_from
+    after = (t >= hold_from) & (t < until)
     figures = {'hold_from': float(hold_from), 'hold_distance_p99': None,
                'hold_distance_max': None, 'hold_theta_e_p99': None, 'hold_theta_e_max': None,
                'hold_omega_tv': None, 'hold_omega_saturated': None,
@@ -235,9 +254,28 @@ def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
     return figures
 
 
+def arrival_metrics(t, x, y, theta, outcome, goal) -> dict:
+    """
+    Return the ``arrival*`` fields of :class:`TrackingMetrics` (see there) as a dict.
+
+    ``outcome`` is the controller's ``arrival`` telemetry
+    (:data:`~nfmr_dlsmc.core.arrival.ARRIVAL_OUTCOMES`), ``goal`` the reference's last pose
+    (x [m], y [m], heading [rad]).
+    """
+    outcome = np.asarray(outcome, dtype=float)
+    ended = np.flatnonzero(outcome != 0.0)
+    if ended.size == 0:
+        return {}
+    k = ended[0]
+    gx, gy, gyaw = goal
+    return {'arrival': ARRIVAL_OUTCOMES[float(outcome[k])], 'arrival_time': float(t[k]),
+            'arrival_position_error': float(math.hypot(x[-1] - gx, y[-1] - gy)),
+            'arrival_yaw_error': abs(float(wrap_angles(np.asarray(theta[-1]) - gyaw)))}
+
+
 def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
                      hold_from: float = HOLD_FROM, omega_saturated=None, steer=None,
-                     steer_joint_velocity=None) -> TrackingMetrics:
+                     steer_joint_velocity=None, outcome=None, goal=None) -> TrackingMetrics:
     """
     Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s].
 
@@ -259,6 +297,9 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
         Sampling period [s], or each sample's duration (:func:`sample_durations`).
     hold_from, omega_saturated, steer, steer_joint_velocity
         For the hold figures, see :func:`hold_metrics`.
+    outcome, goal
+        For the arrival figures (a path), see :func:`arrival_metrics`; the hold window then
+        ends when the run did.
 
     """
     t = np.asarray(t, dtype=float)
@@ -269,6 +310,8 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
     th_e = error_criteria(theta_e, dt)
     th_r = error_criteria(theta_r_error, dt)
     t_conv = convergence_time(t, distance)
+    arrival = ({} if outcome is None or goal is None
+               else arrival_metrics(t, x, y, theta, outcome, goal))
     if t_conv is None:
         after_theta = after_tv = None
     else:
@@ -285,21 +328,24 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
         max_abs_theta_e_after_conv=after_theta, omega_tv_after_conv=after_tv,
         t_conv_1cm=convergence_time(t, distance, COARSE_TOLERANCE),
         **hold_metrics(t, distance, theta_e, omega, dt, hold_from, omega_saturated, steer,
-                       steer_joint_velocity))
+                       steer_joint_velocity, arrival.get('arrival_time', math.inf)),
+        **arrival)
 
 
-def simulation_metrics(result, hold_from: float = HOLD_FROM) -> TrackingMetrics:
+def simulation_metrics(result, hold_from: float = HOLD_FROM, goal=None) -> TrackingMetrics:
     """
     Return the :func:`tracking_metrics` of a :class:`~nfmr_dlsmc.plants.kinematic.SimResult`.
 
     With its saturation flags, commanded steer angles and measured steer joint rates where
-    the controller and the plant have them.
+    the controller and the plant have them, and with ``goal`` (a path's last pose) the
+    arrival figures of a controller that reports ``arrival``.
     """
     return tracking_metrics(
         result.t, result.state[:, 0], result.state[:, 1], result.state[:, 2],
         result.reference[:, 0], result.reference[:, 1], result.telemetry['theta_d'],
         result.theta_r, result.v, result.omega, result.dt, hold_from,
-        result.telemetry.get('omega_saturated'), result.steer, result.steer_joint_velocity)
+        result.telemetry.get('omega_saturated'), result.steer, result.steer_joint_velocity,
+        result.telemetry.get('arrival'), goal)
 
 
 def format_metric(value) -> str:

@@ -13,6 +13,10 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
   period;
 - ``trajectory.name`` and each trajectory's parameters under its name
   (``trajectory.sine.speed``, ``trajectory.circle.radius``, ...); the named one is used;
+  ``path``: the points of ``trajectory.path.file``, rounded and timed by
+  ``trajectory.path.*`` (:class:`~nfmr_dlsmc.core.path_reference.PathProfile`, its
+  ``omega_max`` the controller's ``limits.omega_max``), and the robot stops at its end
+  (:class:`~nfmr_dlsmc.core.arrival.ArrivalConfig`);
 - ``steering.*`` (:class:`~nfmr_dlsmc.core.steering.SteerMode`) and ``geometry.*``
   (:class:`~nfmr_dlsmc.core.steering.RobotGeometry`);
 - ``estimator.*`` (:class:`~nfmr_dlsmc.core.pose_estimator.EstimatorConfig`);
@@ -21,12 +25,14 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
 Unknown names are errors, so a typo never silently leaves a default in place.
 """
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 from nfmr_dlsmc.baselines.registry import gain_sections
+from nfmr_dlsmc.core.arrival import ArrivalConfig
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.path_reference import PathProfile
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.schema import (
     check_fields,
@@ -46,6 +52,8 @@ from nfmr_dlsmc.core.schema import (
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.path_files import load_path_trajectory
+from nfmr_dlsmc.runtime.share import shipped_config
 import yaml
 
 
@@ -57,9 +65,20 @@ class ParamsFileError(NfmrError, ValueError):
 _CONTROL_RATE = Param('control_rate', float, 1.0 / DlsmcConfig.dt, 'Hz',
                       'control rate; the control period is its inverse (paper: 1 kHz)',
                       POSITIVE, read_only=True)
+#: The reference that is not an analytic trajectory: a path file's points.
+PATH = 'path'
 _TRAJECTORY_NAME = Param('trajectory.name', str, 'sine', '', 'the reference tracked: the '
-                         'trajectory of that name below', one_of(*TRAJECTORY_TYPES),
-                         read_only=True)
+                         'trajectory of that name below; path: the points of '
+                         'trajectory.path.file, and the robot stops at the last',
+                         one_of(*TRAJECTORY_TYPES, PATH), read_only=True)
+_PATH_FILE = Param('trajectory.path.file', str, '', '', 'path file (CSV with a header x,y '
+                   'or t,x,y [s, m, m]; or YAML, a list of [x, y] or [t, x, y]); a relative '
+                   "name not found from the working directory is looked up in nfmr's config/",
+                   Rule('a path file with trajectory.name path'), read_only=True)
+#: The path's yaw-rate limit is the controller's, not a parameter of its own. Like every
+#: trajectory parameter they are read-only: the reference is built once per activation.
+_PATH_PROFILE = [replace(p, read_only=True) for p in params_of(PathProfile)
+                 if p.name != 'trajectory.path.omega_max']
 #: The trajectory classes check their own parameters (:mod:`nfmr_dlsmc.core.trajectories`).
 _BY_TRAJECTORY = Rule('checked by the trajectory')
 
@@ -75,6 +94,7 @@ class ControllerParams:
     steering: SteerMode = field(default_factory=SteerMode)
     geometry: RobotGeometry = field(default_factory=RobotGeometry)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    arrival: ArrivalConfig | None = None  # with a path: when the robot has arrived
 
 
 @documented
@@ -204,7 +224,33 @@ def _trajectory_parameters() -> list[Param]:
         found += [Param(f'trajectory.{kind}.{f.name}', float, f.default, '',
                         f"{f.name} of the '{kind}' trajectory", _BY_TRAJECTORY,
                         read_only=True) for f in fields(cls)]
-    return found
+    return [*found, _PATH_FILE, *_PATH_PROFILE,
+            *(replace(p, read_only=True) for p in params_of(ArrivalConfig))]
+
+
+def path_file(name: str) -> Path:
+    """
+    Return where the path file ``trajectory.path.file = name`` is.
+
+    As given if it exists (absolute, or relative to the working directory), else a relative
+    name under nfmr's shipped ``config/`` (``paths/warehouse_loop.csv``), else as given (its
+    reading then says it is missing).
+    """
+    given = Path(name)
+    if given.exists() or given.is_absolute():
+        return given
+    shipped = shipped_config(name)
+    return shipped if shipped.exists() else given
+
+
+def _path_reference(flat: dict, dlsmc: DlsmcConfig):
+    """Return the path of ``trajectory.path.*`` and its arrival rule."""
+    name = flat.get(_PATH_FILE.name, _PATH_FILE.default)
+    if not isinstance(name, str) or not name.strip():
+        raise ParameterError(_PATH_FILE.name, name, 'must name a path file (CSV or YAML) '
+                             'when trajectory.name is path')
+    profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max)
+    return load_path_trajectory(path_file(name), profile), from_flat(ArrivalConfig, flat)
 
 
 def controller_parameters() -> list[Param]:
@@ -250,16 +296,26 @@ def controller_params(flat: dict) -> ControllerParams:
     if mode.is_crab:
         raise ParameterError('steering.j1', mode.j1, 'must be > -1: the DLSMC steers by yawing, '
                              'which crab mode (j1 = -1) cannot')
-    try:
-        reference = make_trajectory(trajectory_name, **trajectory)
-    except ParameterError as exc:
-        if exc.parameter == _TRAJECTORY_NAME.name:
-            raise
-        field_name = exc.parameter.rpartition('.')[2]  # name it as the file does
-        raise ParameterError(f'{own}{field_name}', exc.value, exc.rule, exc.unit) from None
+    arrival = None
+    if trajectory_name == PATH:
+        reference, arrival = _path_reference(flat, dlsmc)
+    else:
+        reference = _analytic_reference(trajectory_name, own, trajectory)
     return ControllerParams(dlsmc=dlsmc,
                             trajectory=reference,
                             trajectory_name=trajectory_name,
                             steering=mode,
                             geometry=from_flat(RobotGeometry, flat),
-                            estimator=from_flat(EstimatorConfig, flat))
+                            estimator=from_flat(EstimatorConfig, flat),
+                            arrival=arrival)
+
+
+def _analytic_reference(name: str, own: str, values: dict):
+    """Return the analytic trajectory ``name`` with ``values``, errors named as the file."""
+    try:
+        return make_trajectory(name, **values)
+    except ParameterError as exc:
+        if exc.parameter == _TRAJECTORY_NAME.name:
+            raise
+        field_name = exc.parameter.rpartition('.')[2]  # name it as the file does
+        raise ParameterError(f'{own}{field_name}', exc.value, exc.rule, exc.unit) from None

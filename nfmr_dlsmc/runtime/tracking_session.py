@@ -14,6 +14,7 @@ commands since predicted), otherwise the latest odometry.
 from dataclasses import dataclass
 import math
 
+from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
@@ -25,7 +26,7 @@ import numpy as np
 STATE_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_r', 'x_e', 'y_e', 'theta_d',
                 'theta_e', 's_x', 's_y', 'eta_hat', 'inner_phase', 'v', 'omega', 'v_raw',
                 'omega_raw', 'v_saturated', 'omega_saturated', 'steer_limited', 'stopped',
-                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr', 'control_time')
+                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr', 'control_time', 'arrival')
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,10 @@ class TrackingSession:
             raise ValueError(f'confirm_messages = {confirm_messages!r}: must be an integer >= 1')
         self.confirm_messages = confirm_messages
         self._new_base = []  # (stamp, control time) [s] of messages off the time base
-        self.controller = DlsmcController(params.dlsmc)
+        self.law = DlsmcController(params.dlsmc)
+        # A path: the law inside the rule that stops at its end (core/arrival.py).
+        self.controller = with_arrival(self.law, params.trajectory, params.arrival)
+        self._outcome = 0.0  # the arrival outcome last reported
         self.estimator = PoseEstimator(params.estimator) if params.estimator.enabled else None
         self._pose = None  # latest valid (x, y, theta)
         self._pose_wall = None  # wall time [s] it arrived
@@ -119,7 +123,7 @@ class TrackingSession:
     def set_params(self, params: ControllerParams) -> None:
         """Take new gains, limits or estimator noise; they take effect at the next tick."""
         self.params = params
-        self.controller.config = params.dlsmc
+        self.law.config = params.dlsmc
         if self.estimator is not None:
             self.estimator.config = params.estimator
 
@@ -244,23 +248,31 @@ class TrackingSession:
         x, y, theta = self._pose
         if self.estimator is not None:
             x, y, theta = self.estimator.pose(control_time) or self._pose
-        ctrl = self.controller
+        ctrl = self.law
         if fault:
             v = omega = 0.0
             steer, wheels = self._steer.copy(), np.zeros(4)
             limited = False
         else:
-            v, omega = ctrl.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step, xddot_d, yddot_d)
+            v, omega = self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step,
+                                            xddot_d, yddot_d)
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
             self._steer = steer
         if self.estimator is not None:
             self.estimator.command(v, omega)
+        outcome = getattr(self.controller, 'outcome', 0.0)
+        if outcome != self._outcome and report is None:
+            self._outcome = outcome
+            report = (f'{ARRIVAL_OUTCOMES[outcome]} at t = {t:.3f} s: '
+                      f'{1e3 * self.controller.position_error:.1f} mm and '
+                      f'{1e3 * abs(self.controller.yaw_error):.1f} mrad from the goal; '
+                      'zero speed until a new reference')
         state = (t, x, y, theta, x_d, y_d, float(reference_heading(xdot_d, ydot_d)),
                  ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
                  ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
                  ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
                  float(limited), float(bool(fault))) + tuple(steer.tolist()) + (
-                     float(control_time),)
+                     float(control_time), outcome)
         return TickOutput(v, omega, steer, wheels, state, bool(fault), report)

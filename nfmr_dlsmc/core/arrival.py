@@ -1,0 +1,178 @@
+"""
+Arrival at the end of a reference that ends at rest: stop there, and never circle the goal.
+
+A path (:mod:`nfmr_dlsmc.core.path_reference`) ends at its last point at rest. The paper's
+laws know no end: their speed never goes below ``limits.v_min`` and, once the reference
+stands still, their heading command points at the goal from wherever the robot is, so a
+robot a few millimetres off would turn around it. :class:`ArrivingController` wraps any
+(v, omega) controller with the rule that ends a run at the goal, the same for every law:
+
+1. The wrapped controller follows a slow reference below v_min
+   (:attr:`~nfmr_dlsmc.core.saturation.SaturatedController.follow_slow_reference`): it
+   starts with the reference from rest and slows down with it on the final approach.
+2. Arrived: once the reference is within :data:`FINAL_SHARE` of ``goal_tolerance`` from the
+   goal (after it has been farther away than ``goal_tolerance``: a loop may start where it
+   ends), a robot within ``goal_tolerance`` [m] of the goal and ``yaw_tolerance`` [rad] of
+   its heading is commanded zero speed from then on (the steering is held by the wheel
+   mapping). Not earlier: a robot that keeps up with the reference then reaches the goal
+   with it, not a tolerance short of it.
+3. Passed: once the reference rests at the goal, a robot that is level with the goal or
+   beyond it (its offset from the goal along the goal's heading is >= 0) but outside the
+   tolerances could only come closer by turning around: it stops where it is.
+4. Timed out: a robot that has neither arrived nor passed ``goal_timeout`` [s] after the
+   reference came to rest (blocked, pushed, too far to the side) stops where it is.
+
+Whichever ends the run, :attr:`ArrivingController.outcome` says which, the next steps
+command zero, and :meth:`~ArrivingController.reset` starts over (a new reference).
+"""
+
+from dataclasses import dataclass
+import math
+from typing import ClassVar
+
+from nfmr_dlsmc.core.schema import check_fields, documented, param, POSITIVE
+
+__all__ = ['ARRIVAL_OUTCOMES', 'ArrivalConfig', 'ArrivingController', 'FINAL_SHARE',
+           'with_arrival']
+
+#: Values of the telemetry field ``arrival``: the run goes on (0) or how it ended.
+ARRIVAL_OUTCOMES = {0.0: 'tracking', 1.0: 'arrived', 2.0: 'passed the goal',
+                    3.0: 'goal timeout'}
+_TRACKING, _ARRIVED, _PASSED, _TIMED_OUT = 0.0, 1.0, 2.0, 3.0
+#: Arrival is checked once the reference is this share of ``goal_tolerance`` from the goal
+#: [-]: close enough that the robot, keeping up with it, arrives with less than the
+#: tolerance of error; early enough that the law is not asked to steer at a speed of
+#: nearly zero, where its heading command is the bearing of a millimetre's error.
+FINAL_SHARE = 0.5
+
+
+@documented
+@dataclass(frozen=True)
+class ArrivalConfig:
+    """When a robot following a path has arrived at its end (:class:`ArrivingController`)."""
+
+    prefix: ClassVar[str] = 'trajectory.path'
+
+    goal_tolerance: float = param(0.005, 'm', 'arrived within this distance of the last '
+                                  'point (and yaw_tolerance of its heading): zero speed from '
+                                  'then on', POSITIVE)
+    yaw_tolerance: float = param(0.05, 'rad', 'arrived within this angle of the heading at '
+                                 'the last point', POSITIVE)
+    goal_timeout: float = param(10.0, 's', 'a robot not arrived this long after the '
+                                'reference came to rest stops where it is, reporting it',
+                                POSITIVE)
+
+    def __post_init__(self):
+        check_fields(self)
+
+
+class ArrivingController:
+    """
+    A (v, omega) controller that stops at the end of its reference (module docstring).
+
+    Parameters
+    ----------
+    controller
+        The law: a :class:`~nfmr_dlsmc.core.saturation.SaturatedController` with
+        ``reset()``, ``step(...)``, ``telemetry()`` and ``TELEMETRY_FIELDS``; its
+        ``follow_slow_reference`` is switched on.
+    goal : tuple of float
+        The last pose of the reference (x [m], y [m], heading [rad]).
+    config : ArrivalConfig
+
+    Attributes
+    ----------
+    outcome : float
+        A key of :data:`ARRIVAL_OUTCOMES`.
+    position_error, yaw_error : float
+        Distance [m] and wrapped heading difference [rad] of the robot to the goal at the
+        step that ended the run (nan before).
+
+    """
+
+    def __init__(self, controller, goal, config: ArrivalConfig | None = None):
+        self.controller = controller
+        controller.follow_slow_reference = True
+        self.goal = tuple(float(v) for v in goal)
+        self.config = ArrivalConfig() if config is None else config
+        self.TELEMETRY_FIELDS = (*controller.TELEMETRY_FIELDS, 'arrival')
+        self.reset()
+
+    @property
+    def period(self) -> float:
+        """Return the wrapped controller's control period [s]."""
+        return self.controller.period
+
+    @property
+    def name(self) -> str:
+        """Return the wrapped controller's name."""
+        return self.controller.name
+
+    def reset(self) -> None:
+        """Start over with the reference from its start."""
+        self.controller.reset()
+        self.outcome = _TRACKING
+        self.position_error = self.yaw_error = math.nan
+        self._left_goal = False  # whether the reference has been away from the goal
+        self._at_rest = 0.0  # time [s] the reference has rested at the goal
+
+    @property
+    def ended(self) -> bool:
+        """Whether the run has ended: arrived, passed or timed out."""
+        return self.outcome != _TRACKING
+
+    def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
+             ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
+             yddot_d: float = 0.0) -> tuple[float, float]:
+        """
+        Run one control period of the wrapped law, or command zero once the run has ended.
+
+        Arguments and return values as the wrapped controller's ``step``.
+        """
+        if self.outcome != _TRACKING:
+            return 0.0, 0.0
+        config = self.config
+        gx, gy, gyaw = self.goal
+        reference_distance = math.hypot(x_d - gx, y_d - gy)
+        reference_near = reference_distance <= config.goal_tolerance
+        if not reference_near:
+            self._left_goal = True
+        dx, dy = x - gx, y - gy
+        distance = math.hypot(dx, dy)
+        yaw_error = math.remainder(theta - gyaw, 2.0 * math.pi)
+        if not self._left_goal:
+            return self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
+                                        yddot_d)
+        if (reference_distance <= FINAL_SHARE * config.goal_tolerance
+                and distance <= config.goal_tolerance and abs(yaw_error) <= config.yaw_tolerance):
+            return self._end(_ARRIVED, distance, yaw_error)
+        if reference_near and xdot_d == 0.0 and ydot_d == 0.0:  # it rests at the goal
+            if dx * math.cos(gyaw) + dy * math.sin(gyaw) >= 0.0:
+                return self._end(_PASSED, distance, yaw_error)
+            self._at_rest += self.controller.period if dt is None else dt
+            if self._at_rest > config.goal_timeout:
+                return self._end(_TIMED_OUT, distance, yaw_error)
+        return self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
+                                    yddot_d)
+
+    def _end(self, outcome: float, distance: float, yaw_error: float) -> tuple[float, float]:
+        self.outcome = outcome
+        self.position_error, self.yaw_error = distance, yaw_error
+        return 0.0, 0.0
+
+    def telemetry(self) -> tuple:
+        """Return the wrapped controller's telemetry and ``arrival`` (the outcome so far)."""
+        return (*self.controller.telemetry(), self.outcome)
+
+
+def with_arrival(controller, trajectory, config: ArrivalConfig | None):
+    """
+    Return ``controller`` stopping at the end of ``trajectory`` when that has one.
+
+    A reference with an ``end_pose`` (a path) and an arrival ``config``: the
+    :class:`ArrivingController` around ``controller``; otherwise ``controller`` itself.
+    """
+    goal = getattr(trajectory, 'end_pose', None)
+    if goal is None or config is None:
+        return controller
+    return ArrivingController(controller, goal, config)

@@ -1,0 +1,211 @@
+"""
+Arrival at the end of a path: the robot stops at the goal and never circles it.
+
+A law follows a slow reference below v_min only where asked to.
+"""
+
+import json
+import math
+from pathlib import Path
+import subprocess
+import sys
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
+from nfmr_dlsmc.core.arrival import (
+    ARRIVAL_OUTCOMES,
+    ArrivalConfig,
+    ArrivingController,
+    with_arrival,
+)
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.gains import DlsmcConfig, InputLimits
+from nfmr_dlsmc.core.path_reference import PathProfile, PathTrajectory
+from nfmr_dlsmc.core.trajectories import Sine
+from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.path_files import PathFileError
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).parents[1]
+BIN = Path(sys.executable).parent
+ROBOT = ROOT / 'config' / 'robot_case1.yaml'
+#: An L: 3 m along x, a rounded corner, 2 m along y; at rest at both ends.
+L_PATH = PathTrajectory.from_points([(0.0, 0.0), (3.0, 0.0), (3.0, 2.0)],
+                                    PathProfile(speed=0.5, corner_radius=0.5))
+#: A square that ends where it started: the goal is the start.
+LOOP = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0),
+                                   (0.0, 0.0)], PathProfile(speed=0.5, corner_radius=0.4))
+GOAL_AHEAD = (1.0, 0.0, 0.0)  # a goal 1 m ahead along x
+
+
+def robot_dlsmc():
+    return DlsmcController(controller_params(load_params_file(ROBOT)).dlsmc)
+
+
+def run(controller, trajectory, x0=None, margin=5.0):
+    x0 = trajectory.start_pose if x0 is None else x0
+    return simulate(controller, trajectory, x0, trajectory.duration + margin)
+
+
+@pytest.mark.parametrize('trajectory', [L_PATH, LOOP], ids=['L', 'loop'])
+def test_the_robot_stops_at_the_goal_with_the_reference_and_stays_there(trajectory):
+    controller = ArrivingController(robot_dlsmc(), trajectory.end_pose)
+    result = run(controller, trajectory)
+    ended = np.flatnonzero(result.telemetry['arrival'] != 0.0)
+    assert ARRIVAL_OUTCOMES[result.telemetry['arrival'][ended[0]]] == 'arrived'
+    t_end = result.t[ended[0]]
+    assert trajectory.duration - 1.0 < t_end <= trajectory.duration  # not at the loop's start
+    assert np.all(result.v[ended] == 0.0) and np.all(result.omega[ended] == 0.0)
+    gx, gy, gyaw = trajectory.end_pose
+    x, y, theta = result.final_state
+    assert math.hypot(x - gx, y - gy) <= controller.config.goal_tolerance
+    assert abs(math.remainder(theta - gyaw, 2 * math.pi)) <= controller.config.yaw_tolerance
+    assert controller.position_error <= controller.config.goal_tolerance
+
+
+def test_below_v_min_only_on_a_reference_slower_than_v_min():
+    paper = run(robot_dlsmc(), L_PATH, margin=0.0)
+    assert paper.v.min() >= InputLimits().v_min  # the paper's floor, even at rest
+    arriving = run(ArrivingController(robot_dlsmc(), L_PATH.end_pose), L_PATH, margin=0.0)
+    moving = arriving.telemetry['arrival'] == 0.0
+    speed = np.hypot(arriving.reference[:, 2], arriving.reference[:, 3])
+    assert arriving.v[moving].min() < 0.05
+    # Below v_min only where the reference itself is slower than that.
+    below = moving & (arriving.v < InputLimits().v_min - 1e-12)
+    assert np.all(arriving.v[below] >= speed[below] - 1e-12)
+
+
+@pytest.mark.parametrize('name', CONTROLLER_NAMES)
+def test_every_law_stops_by_the_same_rule_and_never_circles(name):
+    controller = with_arrival(build_controller(name, None, InputLimits(), 0.001), L_PATH,
+                              ArrivalConfig())
+    result = run(controller, L_PATH, margin=ArrivalConfig().goal_timeout + 2.0)
+    outcome = result.telemetry['arrival']
+    assert outcome[-1] != 0.0, 'the run never ended'
+    # Never circles: the heading changes by less than a half turn from the path's end on.
+    late = result.t >= L_PATH.duration - 2.0
+    assert np.ptp(result.state[late, 2]) < math.pi
+    assert np.all(result.v[outcome != 0.0] == 0.0)
+
+
+def _step_at(controller, pose, reference, n=1, dt=0.001):
+    for _ in range(n):
+        v, omega = controller.step(*pose, *reference, dt)
+    return v, omega
+
+
+def test_a_robot_level_with_or_past_the_goal_stops_where_it_is():
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, ArrivalConfig())
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))  # the reference leaves...
+    v, omega = _step_at(controller, (1.02, 0.03, 0.0), (1.0, 0.0, 0.0, 0.0))  # ...and rests
+    assert (v, omega) == (0.0, 0.0)
+    assert ARRIVAL_OUTCOMES[controller.outcome] == 'passed the goal'
+    assert controller.position_error == pytest.approx(math.hypot(0.02, 0.03))
+
+
+def test_a_blocked_robot_stops_after_the_goal_timeout_not_before():
+    config = ArrivalConfig(goal_timeout=0.5)
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, config)
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))
+    blocked = (0.9, 0.1, 0.0)  # behind the goal and to its side; it never moves
+    _step_at(controller, blocked, (1.0, 0.0, 0.0, 0.0), n=499)
+    assert not controller.ended
+    v, omega = _step_at(controller, blocked, (1.0, 0.0, 0.0, 0.0), n=2)
+    assert (v, omega) == (0.0, 0.0) and ARRIVAL_OUTCOMES[controller.outcome] == 'goal timeout'
+    controller.reset()
+    assert not controller.ended and math.isnan(controller.position_error)
+
+
+def test_a_reference_resting_where_it_starts_is_no_arrival():
+    controller = ArrivingController(robot_dlsmc(), (0.0, 0.0, 0.0), ArrivalConfig())
+    v, _ = _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), n=100)
+    assert not controller.ended and v == 0.0  # at rest with a reference at rest
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0), st.floats(-math.pi, math.pi),
+       st.floats(0.0, 1.0))
+def test_after_the_end_every_command_is_zero(x, y, theta, speed):
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, ArrivalConfig(goal_timeout=0.01))
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))
+    _step_at(controller, (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))  # passed: ended
+    assert _step_at(controller, (x, y, theta), (1.0, 0.0, speed, 0.0)) == (0.0, 0.0)
+
+
+def test_the_paper_law_is_unchanged_without_a_path():
+    assert with_arrival(robot_dlsmc(), Sine(), ArrivalConfig()).__class__ is DlsmcController
+    plain = simulate(DlsmcController(DlsmcConfig()), Sine(), (1.0, 4.0, 0.0), 2.0)
+    assert plain.v.min() >= InputLimits().v_min
+
+
+def test_path_parameters_name_what_is_wrong():
+    with pytest.raises(ParameterError, match="trajectory.path.file = '': must name a path"):
+        controller_params({'trajectory.name': 'path'})
+    with pytest.raises(PathFileError, match='no-such-path.csv: no such file'):
+        controller_params({'trajectory.name': 'path', 'trajectory.path.file': 'no-such-path.csv'})
+    with pytest.raises(ParameterError, match='trajectory.path.goal_tolerance = -1'):
+        controller_params({'trajectory.name': 'path', 'trajectory.path.goal_tolerance': -1.0,
+                           'trajectory.path.file': 'paths/warehouse_loop.csv'})
+    with pytest.raises(ParameterError, match='trajectory.path.omega_max'):
+        controller_params({'trajectory.path.omega_max': 1.0})  # the controller's limit is used
+    params = controller_params({'trajectory.name': 'path', 'limits.omega_max': 1.2,
+                                'trajectory.path.file': 'paths/warehouse_loop.csv'})
+    assert params.trajectory.profile.omega_max == 1.2  # a shipped path by its config/ name
+    assert params.arrival == ArrivalConfig()
+
+
+def nfmr_eval(*args):
+    return subprocess.run([str(BIN / 'nfmr-eval'), *args], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300)
+
+
+def test_nfmr_eval_follows_a_path_file_and_reports_the_arrival():
+    proc = nfmr_eval('--params', str(ROBOT), '--path', 'config/paths/warehouse_loop.csv',
+                     '--hold-from', '5', '--json')
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.splitlines()[-1])
+    reference_end = result['scenario']['duration'] - 5.0  # the default: 5 s to arrive
+    assert result['scenario']['trajectory'] == 'path'
+    assert result['scenario']['x0'] == pytest.approx([0.0, 0.0, 0.0], abs=1e-9)
+    assert result['arrival'] == 'arrived'
+    assert reference_end - 2.0 < result['arrival_time'] <= reference_end
+    assert result['arrival_position_error'] <= 0.005
+    assert result['arrival_yaw_error'] <= 0.01
+    assert result['hold_distance_p99'] <= 0.003 and result['hold_omega_saturated'] == 0.0
+
+
+def test_nfmr_eval_refuses_a_path_and_a_trajectory_and_a_bad_path_file(tmp_path):
+    proc = nfmr_eval('--path', 'config/paths/warehouse_loop.csv', '--trajectory', 'sine')
+    assert proc.returncode == 2 and 'not allowed with argument' in proc.stderr
+    bad = tmp_path / 'bad.csv'
+    bad.write_text('x,y\n0,0\n1,abc\n')
+    proc = nfmr_eval('--path', str(bad))
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
+    assert "line 3, column y: 'abc' is not a number" in proc.stderr
+
+
+def test_the_node_session_says_arrived_once_and_commands_zero_from_then_on():
+    from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
+    params = controller_params({**load_params_file(ROBOT), 'trajectory.name': 'path',
+                                'trajectory.path.file': 'paths/warehouse_loop.csv',
+                                'trajectory.path.speed': 2.0})
+    session = TrackingSession(params, odom_timeout=1.0)
+    trajectory, dt = params.trajectory, params.dlsmc.dt
+    x, y, theta = trajectory.start_pose
+    reports, outcomes = [], []
+    for k in range(int((trajectory.duration + 1.0) / dt)):
+        session.on_odometry(x, y, theta, k * dt, k * dt)
+        out = session.tick(k * dt, k * dt)
+        reports += [out.report] if out.report else []
+        outcomes.append(out.state[STATE_FIELDS.index('arrival')])
+        x += out.v * math.cos(theta) * dt
+        y += out.v * math.sin(theta) * dt
+        theta += out.omega * dt
+    arrived = [r for r in reports if r.startswith('arrived')]
+    assert len(arrived) == 1 and 'mm' in arrived[0], reports
+    first = outcomes.index(1.0)
+    assert set(outcomes[first:]) == {1.0} and out.v == 0.0 and out.omega == 0.0
