@@ -249,6 +249,15 @@ class TrackingSession:
         if self.estimator is not None:
             x, y, theta = self.estimator.pose(control_time) or self._pose
         ctrl = self.law
+        if not fault and not all(math.isfinite(v) for v in (
+                x, y, theta, x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d)):
+            # A tick at an absurd time: the estimate or the reference there overflows.
+            fault = ('finite', f'the pose estimate or the reference at t = {t:g} s is not '
+                               'finite')
+            self._tracked_last = False
+            if report is None and self._fault_reported != 'finite':
+                report = f'stopping the robot: {fault[1]}'
+            self._fault_reported = 'finite'
         if fault:
             v = omega = 0.0
             steer, wheels = self._steer.copy(), np.zeros(4)
