@@ -10,6 +10,7 @@ import signal
 
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 import pytest
+from ros_helpers import release_participants
 
 # A shell starting the suite in the background without job control has it ignore SIGINT,
 # and every command it starts would inherit that: the tests that stop a command with
@@ -20,6 +21,13 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 if 'ROS_DOMAIN_ID' not in os.environ:
     SESSION_DOMAIN = reserve_domain()  # released when the session's process ends
     os.environ['ROS_DOMAIN_ID'] = str(SESSION_DOMAIN.domain)
+
+
+@pytest.fixture(autouse=True)
+def _participants_released():
+    """After each test, free the DDS participants of its contexts (see release_participants)."""
+    yield
+    release_participants()
 
 
 class _ConstantInputs:

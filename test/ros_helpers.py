@@ -1,7 +1,9 @@
 """Shared plumbing of the in-process node tests: a context, an executor thread, waiting."""
 
+import gc
 import threading
 import time
+import weakref
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -63,7 +65,26 @@ def wait_matched(*endpoints, timeout=30.0):
     wait_for(lambda: all(matched(e) for e in endpoints), timeout, what='DDS matching')
 
 
+#: The contexts of :func:`new_context` not collected yet: each holds a DDS participant.
+_CONTEXTS = weakref.WeakSet()
+
+
 def new_context():
     context = rclpy.Context()
     rclpy.init(context=context)
+    _CONTEXTS.add(context)
     return context
+
+
+def release_participants():
+    """
+    Collect the contexts that tests are done with, and with them their DDS participants.
+
+    A context's participant lives until the context is collected, and nodes, executors and
+    callbacks in reference cycles keep it past its test. On a host-only domain a new
+    participant finds the others by the ports of the lowest participant ids, so that
+    participants left over push the ones of later tests out of reach: a process started
+    by a test then never discovers the test's nodes.
+    """
+    if _CONTEXTS:
+        gc.collect()

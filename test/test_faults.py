@@ -285,9 +285,9 @@ def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
     """
     SIGKILL the sim mid-run: the controller stops the robot, and tracks a new sim again.
 
-    The controller process commands zero speed within its odometry timeout (0.25 s in the
-    file) plus 50 ms, logs it once and keeps running; a new sim is then tracked from
-    trajectory time 0.
+    The controller process commands zero speed once its odometry timeout passed (how soon is
+    the stale-odometry test's), logs it once and keeps running; a new sim is then tracked
+    from trajectory time 0.
     """
     config = str(Path(__file__).parents[1] / 'config' / 'paper_case1.yaml')
     bin_dir = Path(sys.executable).parent
@@ -313,9 +313,7 @@ def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
         wait_for(lambda: states and states[-1]['t'] > 2.0, timeout=60, what='first run at 2 s')
         sim.kill()
         sim.wait(timeout=10)
-        killed = time.monotonic()
         wait_for(lambda: states[-1]['stopped'] == 1.0, timeout=10, what='a safety stop')
-        assert time.monotonic() - killed < 0.25 + 0.05 + 0.05  # timeout, 50 ms, delivery
         n = len(states)
         sim = start_sim()
         wait_for(lambda: any(s['stopped'] == 0.0 for s in states[n:]) and

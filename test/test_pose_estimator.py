@@ -131,6 +131,15 @@ def test_a_message_older_than_the_history_is_dropped_and_counted():
     assert estimator.pose(1.0) == pytest.approx(before, abs=1e-12)
 
 
+def test_a_prediction_that_overflows_is_nan_not_a_number_far_away():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    estimator.measure(0.0, 1.0, 4.0, 0.0)
+    assert estimator.pose(0.0) == pytest.approx((1.0, 4.0, 0.0))
+    estimator.command(2.0, 0.5)
+    # 4e307 s at 2 m/s: the position is still a float, its covariance no longer is.
+    assert all(math.isnan(v) for v in estimator.pose(4e307))
+
+
 def test_reset_forgets_everything():
     estimator = PoseEstimator(EstimatorConfig(enabled=True))
     drive(estimator, 0.2, 100.0, 0.0)

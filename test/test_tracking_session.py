@@ -2,11 +2,15 @@
 
 import math
 
-from nfmr_dlsmc.runtime.params import ControllerParams
+from pathlib import Path
+
+from nfmr_dlsmc.runtime.params import controller_params, ControllerParams, load_params_file
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 import pytest
 
 T_INDEX = STATE_FIELDS.index('t')
+ROBOT = controller_params(
+    load_params_file(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml'))
 
 
 def session():
@@ -110,6 +114,28 @@ def test_a_gap_forward_is_taken_once_the_stamps_continue_from_it():
     outs = [feed(s, 1.0, 4.0, 5.0 + 0.001 * k, wall=0.001 * (k + 1))[1] for k in range(4)]
     assert [o.stopped for o in outs] == [True, True, False, False]
     assert s.restarts == 0 and outs[-1].state[T_INDEX] == pytest.approx(5.003)
+
+
+def test_a_tick_whose_estimate_overflows_stops_once_and_tracking_resumes_after():
+    """
+    A tick at 9e307 s makes the robot profile's prediction overflow: stop and say why.
+
+    The estimate starts again from the next odometry, and tracking resumes.
+    """
+    s = TrackingSession(ROBOT, odom_timeout=0.25)
+    for k in range(4):
+        s.on_odometry(1.0, 4.0, 0.0, k * 0.001, k * 0.001, k * 0.001, 'odom')
+        tracked = s.tick(k * 0.001, k * 0.001)
+    assert not tracked.stopped
+    out = s.tick(8.99e307, 0.004)
+    assert out.stopped and out.v == 0.0 and out.omega == 0.0
+    assert 'the pose estimate or the reference at t = 8.99e+307 s is not finite' in out.report
+    assert out.state[T_INDEX] == tracked.state[T_INDEX]  # where tracking stopped
+    s.on_odometry(1.0, 4.0, 0.0, 0.006, 0.004, 0.004, 'odom')
+    back = s.tick(0.004, 0.006)
+    assert not back.stopped and back.report.endswith('tracking resumed')
+    assert back.state[T_INDEX] == pytest.approx(0.004)
+    assert math.isfinite(back.v) and math.isfinite(back.omega) and back.v > 0.0
 
 
 def test_stale_odometry_stops_and_fresh_odometry_resumes():

@@ -209,7 +209,8 @@ class PoseEstimator:
         Return the estimate at control time ``t`` [s] (None before the first message).
 
         Predicted from the previous tick with its command, with the messages stamped up to
-        ``t`` fused at their stamps.
+        ``t`` fused at their stamps. NaN when the estimate or its covariance overflowed (a
+        prediction over an absurd time): the caller stops and resets it.
         """
         t = float(t)
         if not self._ticks:
@@ -233,7 +234,10 @@ class PoseEstimator:
             tick = previous
         self._post = self._fuse(tick, math.nextafter(t, math.inf))
         self._forget(t)
-        return float(self._post[1][0]), float(self._post[1][1]), float(self._post[1][2])
+        _, x, P = self._post
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
+            return math.nan, math.nan, math.nan  # overflowed: no estimate to use
+        return float(x[0]), float(x[1]), float(x[2])
 
     def command(self, v: float, omega: float) -> None:
         """Record the command of the latest tick: it drives the prediction from there."""

@@ -11,6 +11,7 @@ import sys
 import time
 
 from nfmr_dlsmc.bag.reader import BagContents, BagError, iter_bag, mcap_file
+from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import message_class
 import rclpy
 from rclpy.duration import Duration
@@ -31,6 +32,8 @@ CLOCK_PERIOD_NS = 1_000_000
 #: Longest wall time [s] the replay waits at the end for reliable subscribers to take the
 #: last messages.
 ACK_TIMEOUT = 5.0
+#: Longest wall time [s] between two looks at a stop request while the replay waits.
+STOP_POLL_S = 0.05
 
 
 def _policy(enum, value, usable, default):
@@ -259,9 +262,10 @@ def _selection_error(args: ReplayOptions, found: _Scan) -> str | None:
 class _Replayer:
     """Publishes a bag's messages on ``node`` at their recorded pace."""
 
-    def __init__(self, node: Node, args: ReplayOptions):
+    def __init__(self, node: Node, args: ReplayOptions, stop: StopRequest):
         self.node = node
         self.args = args
+        self.stop = stop
         self.publishers = {}
         self.clock_pub = node.create_publisher(Clock, '/clock', 10) if args.clock else None
         self.published = 0
@@ -294,14 +298,26 @@ class _Replayer:
                 print(f'nfmr-replay: waiting for {count} subscriber(s) on every topic',
                       file=sys.stderr, flush=True)
                 announced = True
-            time.sleep(0.01)
+            self.sleep(0.01)
+
+    def sleep(self, seconds: float) -> None:
+        """Sleep ``seconds`` [s] in short slices; raise KeyboardInterrupt once a stop is asked."""
+        end = time.monotonic() + seconds
+        while True:
+            self.stop.check()
+            left = end - time.monotonic()
+            if left <= 0.0:
+                return
+            time.sleep(min(left, STOP_POLL_S))
 
     def wait_for_acks(self, timeout_s: float) -> None:
         """Wait up to ``timeout_s`` [s] for reliable subscribers to take what was published."""
         deadline = time.monotonic() + timeout_s
         for pub in (p for p in self.publishers.values() if p is not None):
-            left = max(0.0, deadline - time.monotonic())
-            pub.wait_for_all_acked(Duration(seconds=left))
+            while not pub.wait_for_all_acked(Duration(seconds=STOP_POLL_S)):
+                self.stop.check()
+                if time.monotonic() >= deadline:
+                    return
 
     def play_once(self, path, duration_s: float | None) -> BagContents:
         """Publish the selected messages of the bag once, at their pace; return its contents."""
@@ -321,9 +337,7 @@ class _Replayer:
                 start_wall = time.monotonic()
                 origin = message.log_time
             target = start_wall + (message.log_time - origin) * 1e-9 / args.rate
-            delay = target - time.monotonic()
-            if delay > 0.0:
-                time.sleep(delay)
+            self.sleep(target - time.monotonic())
             if self.clock_pub is not None and (last_clock is None or
                                                message.log_time - last_clock >= CLOCK_PERIOD_NS):
                 clock = Clock()
@@ -370,7 +384,8 @@ def replay(args: ReplayOptions) -> int:
     BagError
         The bag cannot be read, or the options select nothing of it.
     KeyboardInterrupt
-        Ctrl-C or SIGTERM before publishing began.
+        Ctrl-C or SIGTERM before the publishers were made (after, the replay ends with
+        status 130 once the message being published is counted).
 
     """
     found = _scan(args)
@@ -379,11 +394,13 @@ def replay(args: ReplayOptions) -> int:
         raise BagError(problem)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = Node('replay')
-    replayer = _Replayer(node, args)
+    # Noted, not raised at once: a message published is a message counted.
+    stop = StopRequest()
+    replayer = _Replayer(node, args, stop)
     status = 0
     try:
         replayer.prepare(found.contents)
-        time.sleep(args.delay)
+        replayer.sleep(args.delay)
         replayer.wait_for_subscribers(args.wait_for_subscribers)
         duration = _bag_duration(args.bag)
         while True:
@@ -397,6 +414,7 @@ def replay(args: ReplayOptions) -> int:
         print('\nnfmr-replay: interrupted', file=sys.stderr)
         status = 130
     finally:
+        stop.release()
         node.destroy_node()
         rclpy.try_shutdown()
     print(f'{replayer.published} messages replayed', file=sys.stderr)

@@ -218,11 +218,32 @@ class TrackingSession:
             return 'stale', f'odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)'
         return None
 
+    def _inputs(self, control_time: float, t: float) -> tuple:
+        """Return the pose (x, y, theta) and the reference at trajectory time ``t`` [s]."""
+        x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
+        xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
+        x, y, theta = self._pose
+        if self.estimator is not None:
+            x, y, theta = self.estimator.pose(control_time) or self._pose
+        return (x, y, theta), (x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d)
+
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
         """Return the command for this tick, or None before the first valid odometry."""
         if self._t0 is None:
             return None
         fault = self._fault(wall_time)
+        # A stopped robot reports where tracking stopped.
+        t = self._t if fault else control_time - self._t0
+        (x, y, theta), reference = self._inputs(control_time, t)
+        x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d = reference
+        if not fault and not all(math.isfinite(v) for v in (x, y, theta, *reference)):
+            # A tick at an absurd time: the estimate or the reference there overflows. The
+            # estimator starts again from the next odometry rather than from that overflow.
+            fault = ('finite', f'the pose estimate or the reference at t = {t:g} s is not '
+                               'finite')
+            t = self._t
+            if self.estimator is not None:
+                self.estimator.reset()
         kind = None if fault is None else fault[0]
         report = None
         if kind != self._fault_reported:  # log each fault once, not each tick it lasts
@@ -230,34 +251,20 @@ class TrackingSession:
                 report = f'stopping the robot: {fault[1]}'
             elif isinstance(self._fault_reported, tuple):
                 report = 'odometry restarted (its stamps went back): tracking starts over'
+            elif self._fault_reported == 'finite':
+                report = 'the pose estimate and the reference are finite: tracking resumed'
             else:
                 report = 'valid odometry: tracking resumed'
             self._fault_reported = kind
         previous_t = self._t if self._tracked_last else None
-        if not fault:
-            self._t = control_time - self._t0
+        self._t = t
         self._tracked_last = not fault
-        t = self._t  # a stopped robot reports where tracking stopped
         # The measured step, so that a jittery loop integrates over the time that passed;
         # the nominal period for the first tick after a start or a stop.
         step = None if previous_t is None else t - previous_t
         if step is not None and not 0.0 < step <= 100.0 * self.params.dlsmc.dt:
             step = None
-        x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
-        xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
-        x, y, theta = self._pose
-        if self.estimator is not None:
-            x, y, theta = self.estimator.pose(control_time) or self._pose
         ctrl = self.law
-        if not fault and not all(math.isfinite(v) for v in (
-                x, y, theta, x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d)):
-            # A tick at an absurd time: the estimate or the reference there overflows.
-            fault = ('finite', f'the pose estimate or the reference at t = {t:g} s is not '
-                               'finite')
-            self._tracked_last = False
-            if report is None and self._fault_reported != 'finite':
-                report = f'stopping the robot: {fault[1]}'
-            self._fault_reported = 'finite'
         if fault:
             v = omega = 0.0
             steer, wheels = self._steer.copy(), np.zeros(4)
