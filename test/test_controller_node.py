@@ -3,8 +3,8 @@
 import math
 import time
 
-from geometry_msgs.msg import Twist, TwistStamped
-from nav_msgs.msg import Odometry
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Odometry, Path as PathMessage
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.controller_node import ControllerNode
@@ -14,7 +14,7 @@ import pytest
 import rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import new_context, Spinner, wait_for, wait_matched
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
@@ -309,3 +309,86 @@ def test_a_restarted_odometry_source_starts_tracking_over(setup):
     assert [s['stopped'] for s in restarted] == [1.0, 1.0, 0.0, 0.0, 0.0]
     assert [round(s['t'], 6) for s in restarted[2:]] == [0.002, 0.003, 0.004]
     assert node.session.restarts == 1
+
+
+def path_message(points, frame='odom', stamps=None):
+    msg = PathMessage()
+    msg.header.frame_id = frame
+    for k, (x, y) in enumerate(points):
+        pose = PoseStamped()
+        if stamps is not None:
+            pose.header.stamp.sec, pose.header.stamp.nanosec = int(stamps[k]), int(
+                round((stamps[k] - int(stamps[k])) * 1e9))
+        pose.pose.position.x, pose.pose.position.y = x, y
+        pose.pose.orientation.w = 1.0
+        msg.poses.append(pose)
+    return msg
+
+
+def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_published(
+        setup, log):
+    node, peer = setup()
+    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
+    followed = []
+    watcher = peer.create_subscription(PathMessage, 'reference_path', followed.append,
+                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                                                  durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    wait_matched(publisher, watcher)
+    wait_for(lambda: followed, what="the trajectory's reference_path")
+    drive(peer, 5)
+    labels = peer.states[0][1].layout.dim[0].label.split(',')
+    refusals = [(path_message([(1.0, 4.0), (3.0, 4.0)], frame='map'), "frame(s) 'map'"),
+                (path_message([(1.0, 4.0)]), 'a path needs at least 2'),
+                (path_message([(1.0, 4.0), (2.0, 4.0), (3.0, 4.0)], stamps=[1.0, 3.0, 2.0]),
+                 'stamps must increase'),
+                (path_message([(6.0, 4.0), (8.0, 4.0)]), 'more than max_start_distance = 1 m')]
+    for k, (message, says) in enumerate(refusals):
+        publisher.publish(message)
+        wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1, what='a refusal')
+        assert says in log.lines[-1] and 'the previous reference stays' in log.lines[-1]
+    drive(peer, 5, start_t=0.005)
+    assert dict(zip(labels, peer.states[-1][1].data))['t'] == pytest.approx(0.009)
+    assert len(followed) == 1  # nothing refused was published
+    publisher.publish(path_message([(1.0, 4.0), (3.0, 4.0), (3.0, 6.0)], stamps=[0.0] * 3))
+    wait_for(lambda: len(followed) == 2, what='the new path on reference_path')
+    assert any('following a new path from the next tick: 3 points' in m for m in log.read())
+    new = followed[-1].poses
+    assert (new[0].pose.position.x, new[0].pose.position.y) == pytest.approx((1.0, 4.0))
+    assert (new[-1].pose.position.x, new[-1].pose.position.y) == pytest.approx((3.0, 6.0))
+    n = len(peer.states)
+    drive(peer, 3, start_t=0.010)
+    states = [dict(zip(labels, m.data)) for _, m in peer.states[n:]]
+    assert [round(s['t'], 6) for s in states] == [0.0, 0.001, 0.002]
+    assert (states[0]['x_d'], states[0]['y_d']) == pytest.approx((1.0, 4.0), abs=1e-9)
+    assert node.session.params.trajectory_name == 'path'
+
+
+def test_arrival_is_logged_once_and_named_on_diagnostics(setup, log):
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    node, peer = setup()
+    diagnostics = []
+    peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
+    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
+    wait_matched(publisher)
+    drive(peer, 1)
+    publisher.publish(path_message([(1.0, 4.0), (1.02, 4.0)]))  # 2 cm ahead
+    wait_for(lambda: any('following a new path' in m for m in log.read()), what='the path')
+    labels = peer.states[0][1].layout.dim[0].label.split(',')
+    pose, t = (1.0, 4.0, 0.0), 0.001
+    while True:  # a robot that is where the reference was one tick before
+        n = len(peer.states)
+        peer.send_odom(*pose, t)
+        wait_for(lambda: len(peer.states) > n, what='a controller reply')
+        state = dict(zip(labels, peer.states[-1][1].data))
+        if state['arrival'] or t > 5.0:
+            break
+        pose, t = (state['x_d'], state['y_d'], 0.0), t + 0.001
+    assert state['arrival'] == 1.0 and state['v'] == 0.0
+    drive(peer, 3, start_t=t + 0.001, pose=pose)
+    assert all(m.data[labels.index('v')] == 0.0 for _, m in peer.states[-3:])  # stays
+    wait_for(lambda: any(s.message.endswith('; arrived') for d in diagnostics
+                         for s in d.status), timeout=5, what='arrived on /diagnostics')
+    status = next(s for d in diagnostics for s in d.status if s.message.endswith('; arrived'))
+    assert {v.key: v.value for v in status.values}['arrival'] == 'arrived'
+    assert sum('arrived at t = ' in m for m in log.read()) == 1

@@ -74,7 +74,7 @@ from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator
 from scipy.ndimage import gaussian_filter1d
 
 __all__ = ['CUSP_ANGLE', 'MERGE_DISTANCE', 'PathError', 'PathProfile', 'PathTrajectory',
-           'SMOOTHING']
+           'SMOOTHING', 'stamped_points']
 
 #: Consecutive points closer than this merge into the first of them [m].
 MERGE_DISTANCE = 1e-3
@@ -364,6 +364,30 @@ class PathTrajectory:
 
 
 # -- the points ---------------------------------------------------------------------------
+
+def stamped_points(xy, stamps) -> np.ndarray:
+    """
+    Return the points of a path whose poses carry stamps, as :meth:`from_points` takes them.
+
+    A planner either leaves every stamp the same (Nav2 gives them all the plan's time, or
+    zero): the speed profile times the path, (N, 2) of x, y [m]; or stamps each pose with the
+    time it is to be reached: (N, 3) of t - t_0, x, y [s, m, m], which
+    :meth:`PathTrajectory.from_points` refuses unless the stamps increase.
+
+    Parameters
+    ----------
+    xy : array_like
+        (N, 2) positions [m].
+    stamps : array_like
+        (N,) stamps [s].
+
+    """
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    stamps = np.asarray(stamps, dtype=float).reshape(-1)
+    if stamps.size == 0 or np.all(stamps == stamps[0]):
+        return xy
+    return np.column_stack([stamps - stamps[0], xy])
+
 
 def _where(index: int, xy) -> str:
     """Return ``point 7 at (3.00, 1.00) m``."""

@@ -11,7 +11,16 @@ dimension is labelled with the comma-separated field names of
 subscriber that comes later still gets it), ``robot_markers``
 (visualization_msgs/MarkerArray at 20 Hz of the node clock: the reference point and the
 desired heading theta_d, :func:`~nfmr_dlsmc.ros.scene.reference_markers`) and
-``/diagnostics`` at 1 Hz, which names the lifecycle state.
+``/diagnostics`` at 1 Hz, which names the lifecycle state (and, following a path, how the
+run ended: ``arrival``).
+
+A path from outside: while active the node takes ``reference_path_in`` (nav_msgs/Path in
+the odometry frame; poses whose stamps increase give the timing, poses all stamped alike are
+timed by ``trajectory.path.*``). A valid one replaces the reference at the next tick
+(:meth:`TrackingSession.replace_reference`) and is published on ``reference_path``; one
+in another frame, with fewer than two distinct points, a non-finite coordinate, stamps that
+go back, a cusp, or a first point more than ``max_start_distance`` from the robot is
+refused in one logged line, and the previous reference stays.
 
 Lifecycle (``rclpy.lifecycle``; ``ros2 lifecycle set /controller <transition>``):
 
@@ -49,6 +58,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
+from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
+from nfmr_dlsmc.core.path_reference import PathError, stamped_points
 from nfmr_dlsmc.core.schema import from_flat
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
@@ -71,11 +82,14 @@ COMMAND_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 PATH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 MARKER_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+#: Paths from outside: reliable, volatile (matches a transient-local publisher too).
+PATH_IN_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
 ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribers' acks
 _REFERENCE_FIELDS = tuple(STATE_FIELDS.index(name) for name in ('x_d', 'y_d', 'theta_d'))
+_ARRIVAL_FIELD = STATE_FIELDS.index('arrival')
 
 
 def _session_options(values: dict) -> dict:
@@ -95,7 +109,8 @@ def _session_options(values: dict) -> dict:
     """
     options = from_flat(NodeOptions, values)
     return {'odom_timeout': options.odom_timeout, 'odom_frame': options.odom_frame,
-            'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold}
+            'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold,
+            'max_start_distance': options.max_start_distance}
 
 
 def _new_session(values: dict) -> TrackingSession:
@@ -122,6 +137,8 @@ class ControllerNode(SchemaLifecycleNode):
         self._active = False  # whether odometry is taken and commands are published
         self._publishers_of_session = []
         self._odom_sub = None  # while active
+        self._path_sub = None  # while active
+        self._arrival = 0.0  # the arrival outcome of the latest tick
         self._clock_sub = None  # while active with tick_source sim_clock
         self._active_timers = []  # the watchdog and the markers, while active
         self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
@@ -194,12 +211,15 @@ class ControllerNode(SchemaLifecycleNode):
             with self._lock:
                 self.session = _new_session(values)
                 self._reference = None
+                self._arrival = 0.0
                 self._stats = LoopStats(overrun_threshold=2.0 * self.session.params.dlsmc.dt)
                 self._active = True
             result = super().on_activate(state)  # the lifecycle publishers publish from here
             self._publish_path()
             self._odom_sub = self.create_subscription(Odometry, 'odom', self._on_odom,
                                                       COMMAND_QOS)
+            self._path_sub = self.create_subscription(Path, 'reference_path_in',
+                                                      self._on_path, PATH_IN_QOS)
             if values['tick_source'] == 'sim_clock':
                 # After the odometry's subscription: a message of both ready at once is taken
                 # in that order, the odometry of a step before the tick of its /clock.
@@ -255,10 +275,10 @@ class ControllerNode(SchemaLifecycleNode):
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 
     def _drop_active_entities(self) -> None:
-        for subscription in (self._odom_sub, self._clock_sub):
+        for subscription in (self._odom_sub, self._clock_sub, self._path_sub):
             if subscription is not None:
                 self.destroy_subscription(subscription)
-        self._odom_sub = self._clock_sub = None
+        self._odom_sub = self._clock_sub = self._path_sub = None
         for timer in self._active_timers:
             self.destroy_timer(timer)
         self._active_timers = []
@@ -316,6 +336,31 @@ class ControllerNode(SchemaLifecycleNode):
         if source == 'odom' and accepted:
             self._tick(stamp)
 
+    def _on_path(self, msg: Path) -> None:
+        """Follow a path from outside from the next tick, or say why not."""
+        frame = self._values['odom_frame']
+        frames = {msg.header.frame_id} | {p.header.frame_id for p in msg.poses} - {''}
+        session = self.session
+        try:
+            if frames != {frame}:
+                raise PathError(f"it is in frame(s) {', '.join(map(repr, sorted(frames)))}, "
+                                f'expected {frame!r} (the odometry frame)')
+            reference = session.path_reference(stamped_points(
+                [(p.pose.position.x, p.pose.position.y) for p in msg.poses],
+                [p.header.stamp.sec + p.header.stamp.nanosec * 1e-9 for p in msg.poses]))
+        except PathError as exc:
+            self.get_logger().error(f'reference_path_in: path of {len(msg.poses)} poses '
+                                    f'refused: {exc.rule}; the previous reference stays')
+            return
+        with self._lock:
+            if not self._active or self.session is not session:
+                return
+            session.replace_reference(reference)
+        self._publish_path(reference)
+        self.get_logger().info(f'reference_path_in: following a new path from the next tick: '
+                               f'{len(reference.points)} points, {reference.length:.2f} m, '
+                               f'{reference.duration:.1f} s')
+
     def _on_clock(self, msg: Clock) -> None:
         """tick_source sim_clock: one step per simulated step, at its time."""
         self._tick(msg.clock.sec + msg.clock.nanosec * 1e-9)
@@ -371,6 +416,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._state_pub.publish(state)
         self._held_steer = out.steer.tolist()
         self._reference = tuple(out.state[k] for k in _REFERENCE_FIELDS)
+        self._arrival = out.state[_ARRIVAL_FIELD]
 
     def _publish_zero(self) -> None:
         """Command zero speed: wheel speeds 0, the steering held where it was commanded."""
@@ -379,12 +425,13 @@ class ControllerNode(SchemaLifecycleNode):
         self._wheel_pub.publish(Float64MultiArray(data=[0.0] * 4))
         self._twist_pub.publish(self._twist(0.0, 0.0))
 
-    def _publish_path(self) -> None:
+    def _publish_path(self, trajectory=None) -> None:
+        """Publish ``trajectory`` (the session's when None) on ``reference_path``."""
         horizon = self._values['path_horizon']
         step = max(PATH_STEP, horizon / (MAX_PATH_POSES - 1))
         self._path_pub.publish(reference_path(
-            self.session.params.trajectory, horizon, step, self.get_clock().now().to_msg(),
-            self._values['odom_frame']))
+            self.session.params.trajectory if trajectory is None else trajectory, horizon,
+            step, self.get_clock().now().to_msg(), self._values['odom_frame']))
 
     def _publish_markers(self) -> None:
         reference = self._reference
@@ -451,6 +498,11 @@ class ControllerNode(SchemaLifecycleNode):
                 ('period_p99_ms', figures.period_p99_ms), ('period_max_ms', figures.period_max_ms),
                 ('overruns', figures.overruns), ('compute_p99_us', figures.compute_p99_us),
                 ('ticks', figures.ticks))]
+        if lifecycle == 'active' and hasattr(self.session.params.trajectory, 'end_pose'):
+            outcome = ARRIVAL_OUTCOMES[self._arrival]
+            status.values.append(KeyValue(key='arrival', value=outcome))
+            if self._arrival:
+                status.message += f'; {outcome}'
         msg = DiagnosticArray(status=[status])
         msg.header.stamp = self.get_clock().now().to_msg()
         self._diag_pub.publish(msg)

@@ -94,7 +94,11 @@ class ControllerParams:
     steering: SteerMode = field(default_factory=SteerMode)
     geometry: RobotGeometry = field(default_factory=RobotGeometry)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
-    arrival: ArrivalConfig | None = None  # with a path: when the robot has arrived
+    #: How a path's points become a reference: the file's, or one received by the node.
+    path_profile: PathProfile = field(default_factory=lambda: PathProfile(
+        omega_max=InputLimits().omega_max))
+    #: When a robot following a path has arrived (unused by the analytic references).
+    arrival: ArrivalConfig = field(default_factory=ArrivalConfig)
 
 
 @documented
@@ -123,6 +127,9 @@ class NodeOptions:
     autostart: bool = param(True, '', 'configure at start and activate once spinning; false: '
                             'stay unconfigured until the lifecycle transitions (nfmr-run drives '
                             'them)', FLAG, read_only=True)
+    max_start_distance: float = param(1.0, 'm', 'a path received on reference_path_in '
+                                      'whose first point is farther than this from the robot '
+                                      'is refused (the previous reference stays)', POSITIVE)
     path_horizon: float = param(100.0, 's', 'reference_path covers the trajectory from t = 0 '
                                 'to this, a pose every 0.05 s (at most 20001 poses: evenly '
                                 'beyond 1000 s)', POSITIVE, read_only=True)
@@ -243,14 +250,13 @@ def path_file(name: str) -> Path:
     return shipped if shipped.exists() else given
 
 
-def _path_reference(flat: dict, dlsmc: DlsmcConfig):
-    """Return the path of ``trajectory.path.*`` and its arrival rule."""
+def _path_reference(flat: dict, profile: PathProfile):
+    """Return the path of ``trajectory.path.file`` rounded and timed by ``profile``."""
     name = flat.get(_PATH_FILE.name, _PATH_FILE.default)
     if not isinstance(name, str) or not name.strip():
         raise ParameterError(_PATH_FILE.name, name, 'must name a path file (CSV or YAML) '
                              'when trajectory.name is path')
-    profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max)
-    return load_path_trajectory(path_file(name), profile), from_flat(ArrivalConfig, flat)
+    return load_path_trajectory(path_file(name), profile)
 
 
 def controller_parameters() -> list[Param]:
@@ -296,9 +302,9 @@ def controller_params(flat: dict) -> ControllerParams:
     if mode.is_crab:
         raise ParameterError('steering.j1', mode.j1, 'must be > -1: the DLSMC steers by yawing, '
                              'which crab mode (j1 = -1) cannot')
-    arrival = None
+    path_profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max)
     if trajectory_name == PATH:
-        reference, arrival = _path_reference(flat, dlsmc)
+        reference = _path_reference(flat, path_profile)
     else:
         reference = _analytic_reference(trajectory_name, own, trajectory)
     return ControllerParams(dlsmc=dlsmc,
@@ -307,7 +313,8 @@ def controller_params(flat: dict) -> ControllerParams:
                             steering=mode,
                             geometry=from_flat(RobotGeometry, flat),
                             estimator=from_flat(EstimatorConfig, flat),
-                            arrival=arrival)
+                            path_profile=path_profile,
+                            arrival=from_flat(ArrivalConfig, flat))
 
 
 def _analytic_reference(name: str, own: str, values: dict):

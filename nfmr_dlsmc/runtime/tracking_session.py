@@ -11,15 +11,16 @@ odometry and runs on the control clock; it keeps running while the robot is stop
 commands since predicted), otherwise the latest odometry.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
-from nfmr_dlsmc.runtime.params import ControllerParams
+from nfmr_dlsmc.runtime.params import ControllerParams, PATH
 import numpy as np
 
 #: Field names of :attr:`TickOutput.state`, in order (the ``controller_state`` layout).
@@ -83,14 +84,18 @@ class TrackingSession:
         so a single stamp far in the future or the past changes nothing.
     confirm_messages : int
         How many messages in a row establish a new time base (>= 1).
+    max_start_distance : float
+        A path given to :meth:`path_reference` whose first point is farther than this [m]
+        from the robot is refused.
 
     """
 
     def __init__(self, params: ControllerParams, odom_timeout: float, odom_frame: str = 'odom',
                  max_jump: float = 10.0, restart_threshold: float = 1.0,
-                 confirm_messages: int = 3):
+                 confirm_messages: int = 3, max_start_distance: float = 1.0):
         self.params = params
         self.odom_timeout = odom_timeout
+        self.max_start_distance = max_start_distance
         self.odom_frame = odom_frame
         self.max_jump = max_jump
         self.restart_threshold = restart_threshold
@@ -113,7 +118,10 @@ class TrackingSession:
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
         self._tracked_last = False  # whether the previous tick tracked (for the step length)
         self._steer = np.zeros(4)
+        self._v = 0.0  # speed [m/s] last commanded
         self._fault_reported = None
+        self._next_reference = None  # a path to follow from the next tick
+        self._received = False  # whether the reference is a path received while running
 
     @property
     def started(self) -> bool:
@@ -122,10 +130,63 @@ class TrackingSession:
 
     def set_params(self, params: ControllerParams) -> None:
         """Take new gains, limits or estimator noise; they take effect at the next tick."""
+        if self._received:  # the path received, not the file's
+            params = replace(params, trajectory=self.params.trajectory, trajectory_name=PATH)
         self.params = params
         self.law.config = params.dlsmc
         if self.estimator is not None:
             self.estimator.config = params.estimator
+
+    def path_reference(self, points) -> PathTrajectory:
+        """
+        Return the reference along ``points`` for the robot as it is now.
+
+        Rounded and timed by ``params.path_profile``, starting from the speed last commanded
+        (at most the cruise speed); ``points`` as :meth:`PathTrajectory.from_points` takes
+        them. Building it takes milliseconds: do it outside the control loop, then
+        :meth:`replace_reference`.
+
+        Raises
+        ------
+        PathError
+            For points that make no path, or a path whose first point is more than
+            ``max_start_distance`` from the robot's latest odometry.
+
+        """
+        profile = self.params.path_profile
+        profile = replace(profile, start_speed=min(abs(self._v), profile.speed))
+        reference = PathTrajectory.from_points(points, profile)
+        if self._pose is not None:
+            x0, y0, _ = reference.start_pose
+            distance = math.hypot(x0 - self._pose[0], y0 - self._pose[1])
+            if distance > self.max_start_distance:
+                raise PathError(f'its first point ({x0:.2f}, {y0:.2f}) m is {distance:.2f} m '
+                                f'from the robot at ({self._pose[0]:.2f}, '
+                                f'{self._pose[1]:.2f}) m: more than max_start_distance = '
+                                f'{self.max_start_distance:g} m', 0, (x0, y0))
+        return reference
+
+    def replace_reference(self, reference: PathTrajectory) -> None:
+        """
+        Follow ``reference`` from the next tick on, from the robot's state then.
+
+        That tick is its time 0; the law starts over as at a new start (its sliding
+        variables' initial-error terms are the errors then, as the paper defines them), and
+        the arrival rule takes the new end: a robot that had arrived moves again.
+        """
+        self._next_reference = reference
+
+    def _adopt(self, reference: PathTrajectory, control_time: float) -> None:
+        """Make ``reference`` the one followed, its time 0 at ``control_time`` [s]."""
+        self.params = replace(self.params, trajectory=reference, trajectory_name=PATH)
+        self._received = True
+        self.controller = with_arrival(self.law, reference, self.params.arrival)
+        self.controller.reset()
+        self._outcome = 0.0
+        if self._t0 is not None:
+            self._t0 = control_time
+            self._t = 0.0
+            self._tracked_last = False
 
     def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
                     control_time: float, stamp: float | None = None,
@@ -229,6 +290,9 @@ class TrackingSession:
 
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
         """Return the command for this tick, or None before the first valid odometry."""
+        if self._next_reference is not None:
+            self._adopt(self._next_reference, control_time)
+            self._next_reference = None
         if self._t0 is None:
             return None
         fault = self._fault(wall_time)
@@ -276,6 +340,7 @@ class TrackingSession:
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
             self._steer = steer
+        self._v = v
         if self.estimator is not None:
             self.estimator.command(v, omega)
         outcome = getattr(self.controller, 'outcome', 0.0)
