@@ -62,6 +62,7 @@ setup(
             'nfmr-tune = nfmr_dlsmc.cli.tune:main',
             'nfmr-tune-baselines = nfmr_dlsmc.cli.tune_baselines:main',
             'nfmr-compare = nfmr_dlsmc.cli.compare:main',
+            'nfmr-publish-path = nfmr_dlsmc.cli.publish_path:main',
         ],
         # nfmr_sim's pybullet chassis as a plant of nfmr-eval, -montecarlo, -compare, -run.
         'nfmr_dlsmc.plants': ['pybullet = nfmr_sim.plant:PYBULLET'],

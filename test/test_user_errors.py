@@ -32,6 +32,9 @@ CASES = [
     ('nfmr-analyze', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
     ('nfmr-replay', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
     ('nfmr-reindex', lambda d: [str(_write(d / 'x.mcap', 'not a bag'))], 'not an MCAP file'),
+    ('nfmr-publish-path', lambda d: [str(d / 'missing.csv')], '{d}/missing.csv: no such file'),
+    ('nfmr-publish-path', lambda d: ['--timeout', '0', str(d / 'missing.csv')],
+     'argument --timeout: must be a finite number > 0'),
     ('nfmr-montecarlo',
      lambda d: ['--params', str(_write(d / 'p.yaml', 'controller:\n  ros__parameters:\n'
                                                      '    inner: {p1: 32}\n'))],
@@ -89,7 +92,7 @@ def test_every_console_script_is_covered():
     scripts = {e.name for e in entry_points(group='console_scripts')
                if e.value.startswith(('nfmr_dlsmc.', 'nfmr_sim.'))}
     assert scripts == {name for name, _, _ in CASES}  # every one at least once
-    assert len(scripts) == 12  # ten nfmr-* commands and the two nodes
+    assert len(scripts) == 13  # eleven nfmr-* commands and the two nodes
 
 
 @pytest.mark.parametrize('name, arguments, needle', CASES,

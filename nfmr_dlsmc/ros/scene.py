@@ -22,7 +22,7 @@ import numpy as np
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-__all__ = ['reference_markers', 'reference_path', 'robot_markers', 'yaw_quaternion']
+__all__ = ['points_path', 'reference_markers', 'reference_path', 'robot_markers', 'yaw_quaternion']
 
 
 def yaw_quaternion(yaw: float) -> Quaternion:
@@ -79,6 +79,45 @@ def reference_path(trajectory, duration_s: float, step_s: float, stamp: Time,
     for pose, x, y, yaw in zip(path.poses, x_d.tolist(), y_d.tolist(), theta_r.tolist()):
         pose.pose.position = Point(x=x, y=y, z=0.0)
         pose.pose.orientation = yaw_quaternion(yaw)
+    return path
+
+
+def points_path(points, stamp: Time, frame_id: str = 'odom') -> Path:
+    """
+    Return a path's points as the nav_msgs/Path a planner sends (``reference_path_in``).
+
+    Parameters
+    ----------
+    points : array_like
+        (N, 2) of x, y [m]: every pose stamped ``stamp`` (the receiver times the path by
+        its speed profile); or (N, 3) of t, x, y [s, m, m]: pose i stamped ``stamp`` + t_i.
+    stamp : builtin_interfaces.msg.Time
+        Stamp of the path (and of the first pose).
+    frame_id : str
+        Frame of the poses.
+
+    Returns
+    -------
+    nav_msgs.msg.Path
+        Poses at (x, y, 0), each oriented along the segment to the next point (the last
+        along the one before it).
+
+    """
+    points = np.asarray(points, dtype=float)
+    timed = points.shape[1] == 3
+    xy = points[:, 1:] if timed else points
+    step = np.diff(xy, axis=0)
+    yaw = np.arctan2(step[:, 1], step[:, 0]) if len(xy) > 1 else np.zeros(0)
+    yaw = np.append(yaw, yaw[-1] if len(yaw) else 0.0)
+    start_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+    path = Path(header=_header(stamp, frame_id))
+    for k, ((x, y), heading) in enumerate(zip(xy.tolist(), yaw.tolist())):
+        ns = start_ns + (round(points[k, 0] * 1e9) if timed else 0)
+        pose = PoseStamped(header=_header(Time(sec=ns // 1_000_000_000,
+                                               nanosec=ns % 1_000_000_000), frame_id))
+        pose.pose.position = Point(x=x, y=y, z=0.0)
+        pose.pose.orientation = yaw_quaternion(heading)
+        path.poses.append(pose)
     return path
 
 

@@ -122,6 +122,7 @@ class TrackingSession:
         self._fault_reported = None
         self._next_reference = None  # a path to follow from the next tick
         self._received = False  # whether the reference is a path received while running
+        self._new_origin = False  # whether the next tick that tracks is trajectory time 0
 
     @property
     def started(self) -> bool:
@@ -176,17 +177,18 @@ class TrackingSession:
         """
         self._next_reference = reference
 
-    def _adopt(self, reference: PathTrajectory, control_time: float) -> None:
-        """Make ``reference`` the one followed, its time 0 at ``control_time`` [s]."""
+    def _adopt(self, reference: PathTrajectory) -> None:
+        """Make ``reference`` the one followed, from the next tick that tracks."""
         self.params = replace(self.params, trajectory=reference, trajectory_name=PATH)
         self._received = True
         self.controller = with_arrival(self.law, reference, self.params.arrival)
         self.controller.reset()
         self._outcome = 0.0
-        if self._t0 is not None:
-            self._t0 = control_time
-            self._t = 0.0
-            self._tracked_last = False
+        self._t = 0.0
+        self._tracked_last = False
+        # Its time 0 is the first tick that tracks: a tick stopped by stale odometry may
+        # come on another clock (the node's watchdog).
+        self._new_origin = self._t0 is not None
 
     def on_odometry(self, x: float, y: float, theta: float, wall_time: float,
                     control_time: float, stamp: float | None = None,
@@ -261,6 +263,7 @@ class TrackingSession:
         if self.estimator is not None:
             self.estimator.reset()
         self._pose = self._t0 = None
+        self._new_origin = False
         self._t = 0.0
         self._tracked_last = False
         self._fault_reported = ('restart', self.restarts)
@@ -291,11 +294,13 @@ class TrackingSession:
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
         """Return the command for this tick, or None before the first valid odometry."""
         if self._next_reference is not None:
-            self._adopt(self._next_reference, control_time)
+            self._adopt(self._next_reference)
             self._next_reference = None
         if self._t0 is None:
             return None
         fault = self._fault(wall_time)
+        if self._new_origin and not fault:
+            self._t0, self._new_origin = control_time, False
         # A stopped robot reports where tracking stopped.
         t = self._t if fault else control_time - self._t0
         (x, y, theta), reference = self._inputs(control_time, t)

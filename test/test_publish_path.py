@@ -1,0 +1,85 @@
+"""nfmr-publish-path as a process: a file reaches a running controller, or one line says why."""
+
+from pathlib import Path
+import subprocess
+import sys
+
+from nav_msgs.msg import Odometry
+from nfmr_dlsmc.ros.controller_node import ControllerNode
+import pytest
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from ros_helpers import new_context, Spinner, wait_for, wait_matched
+from std_msgs.msg import Float64MultiArray
+
+PUBLISH = str(Path(sys.executable).parent / 'nfmr-publish-path')
+QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def run(*args, timeout=60):
+    return subprocess.run([PUBLISH, *args], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.parametrize('text, says', [
+    (None, 'missing.csv: no such file'),
+    ('x,y\n0,0\n1,abc\n', "line 3, column y: 'abc' is not a number"),
+    ('x,y\n0,0\n2,0\n0,0\n', 'line 3: point 1 at (2.00, 0.00) m: the path turns back on itself'),
+])
+def test_a_file_that_makes_no_path_is_one_line_and_exit_2(tmp_path, text, says):
+    file = tmp_path / 'missing.csv'
+    if text is not None:
+        file.write_text(text)
+    done = run(str(file))
+    assert done.returncode == 2
+    assert done.stderr.count('\n') == 1 and says in done.stderr, done.stderr
+    assert done.stderr.startswith('nfmr-publish-path: error: ')
+
+
+def test_without_a_controller_it_says_so_after_the_timeout_with_exit_1():
+    done = run('paths/warehouse_loop.csv', '--topic', 'nobody_listens', '--timeout', '0.5')
+    assert done.returncode == 1
+    assert done.stderr == ('nfmr-publish-path: no subscriber on /nobody_listens within 0.5 s '
+                           '(is a controller active on this ROS domain?)\n')
+
+
+def test_a_running_controller_follows_the_published_file(tmp_path):
+    file = tmp_path / 'ahead.csv'
+    file.write_text('x,y\n1.0,4.0\n3.0,4.0\n3.0,6.0\n')
+    context = new_context()
+    controller = ControllerNode(context=context)
+    peer = Node('odometry', context=context)
+    odom = peer.create_publisher(Odometry, 'odom', QOS)
+    states = []
+    peer.create_subscription(Float64MultiArray, 'controller_state', states.append, QOS)
+    spinner = Spinner(context, controller, peer)
+    try:
+        controller.start()
+        wait_matched(odom)
+
+        def send(t):
+            msg = Odometry()
+            msg.header.frame_id = 'odom'
+            msg.header.stamp.sec, msg.header.stamp.nanosec = 0, int(t * 1e9)
+            msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
+            msg.pose.pose.orientation.w = 1.0
+            n = len(states)
+            odom.publish(msg)
+            wait_for(lambda: len(states) > n, what='a controller reply')
+
+        send(0.0)
+        done = run(str(file))
+        assert done.returncode == 0, done.stderr
+        assert done.stdout == f'nfmr-publish-path: 3 points (untimed) of {file} taken on ' \
+                              'reference_path_in\n'
+        wait_for(lambda: controller.session.params.trajectory_name == 'path' or
+                 controller.session._next_reference is not None, what='the path taken')
+        send(0.001)
+        labels = states[0].layout.dim[0].label.split(',')
+        last = dict(zip(labels, states[-1].data))
+        assert last['t'] == 0.0 and (last['x_d'], last['y_d']) == pytest.approx((1.0, 4.0))
+        assert controller.session.params.trajectory.end_pose[:2] == pytest.approx((3.0, 6.0))
+    finally:
+        spinner.close()
+        controller.destroy_node()
+        peer.destroy_node()
+        context.try_shutdown()
