@@ -1,5 +1,6 @@
 """nfmr-run end to end: two node processes, real DDS, a recorded bag read three ways."""
 
+import math
 from pathlib import Path
 import re
 import signal
@@ -26,6 +27,7 @@ from rclpy.serialization import deserialize_message
 from ros_helpers import new_context, Spinner, wait_for
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
+from std_msgs.msg import Float64MultiArray
 import yaml
 
 RUN = str(Path(sys.executable).parent / 'nfmr-run')
@@ -385,3 +387,24 @@ def test_the_end_says_how_the_run_kept_its_timing(short_run):
     rate = float(re.search(r'controller loop ([0-9.]+) Hz', line).group(1))
     assert rate == pytest.approx(1000.0, rel=1e-3)
     assert ', 0 overruns' in line and 'sim braked 0 times' in line
+
+
+def test_a_path_file_is_followed_from_its_start_and_the_run_says_how_it_ended(tmp_path):
+    from nfmr_dlsmc.bag.reader import read_bag
+
+    path = tmp_path / 'ahead.csv'
+    path.write_text('x,y\n2.0,1.0\n3.0,1.5\n')  # 1.1 m along yaw 0.46 rad, ~4 s
+    proc = start_run(tmp_path, '--path', str(path), '--duration', '6', '--no-compare')
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    assert '(hold: after 5 s)' in stdout  # a path's own hold window
+    rows = table_columns(stdout, ('end of the path', 'distance to the goal at rest'))
+    assert rows['end of the path'] == ['arrived']
+    assert float(rows['distance to the goal at rest'][0]) <= 0.005
+    bag = Path(stdout.strip().splitlines()[-1])
+    state = read_bag(bag, topics=['/controller_state']).of('/controller_state')
+    labels = deserialize_message(state[0].data, Float64MultiArray).layout.dim[0].label.split(',')
+    first = dict(zip(labels, deserialize_message(state[0].data, Float64MultiArray).data))
+    # The robot starts at the path's first point, along it: no error to begin with.
+    assert (first['x'], first['y']) == pytest.approx((2.0, 1.0), abs=1e-3)
+    assert first['theta'] == pytest.approx(math.atan2(0.1, 0.2), abs=1e-3)

@@ -14,7 +14,12 @@ from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.dlsmc import DlsmcController
-from nfmr_dlsmc.core.metrics import format_metric, HOLD_ROWS, simulation_metrics
+from nfmr_dlsmc.core.metrics import (
+    ARRIVAL_ROWS,
+    format_metric,
+    HOLD_ROWS,
+    simulation_metrics,
+)
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
@@ -258,8 +263,6 @@ def format_table(result: dict, paper: dict | None) -> str:
         lines.append(line)
     if result.get('arrival'):
         lines += [f"{'end of the path':<46} {result['arrival']:>12}"]
-        lines += [f'{label:<46} {format_metric(result[key]):>12}' for label, key in (
-            ('stopped at [s]', 'arrival_time'),
-            ('distance to the goal at rest [m]', 'arrival_position_error'),
-            ('|heading error| at the goal at rest [rad]', 'arrival_yaw_error'))]
+        lines += [f'{label:<46} {format_metric(result[key]):>12}'
+                  for label, key in ARRIVAL_ROWS]
     return '\n'.join(lines)

@@ -14,6 +14,10 @@ from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.ros.launcher import run, RunOptions
 
+#: Default start of the hold window of a path [s]: a path starts from rest, and a robot
+#: that keeps up with it holds it a few seconds in.
+PATH_HOLD_FROM = 5.0
+
 
 def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
@@ -31,13 +35,19 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="the robot's odometry from a preset instead of the file's sim "
                              'section (ideal, good, harsh); metrics are of the ground truth')
-    parser.add_argument('--duration', type=float, default=100.0, help='simulated time [s]')
+    parser.add_argument('--duration', type=float, default=None,
+                        help="simulated time [s] (default: 100, or with a path its own "
+                             "duration and 5 s to arrive)")
+    parser.add_argument('--path', type=Path, default=None, metavar='FILE',
+                        help='follow this path file (CSV x,y or t,x,y, or YAML) instead of '
+                             "the file's trajectory, from its first point, and stop at its "
+                             'end; relative: from the working directory, else config/')
     parser.add_argument('--out', type=Path, default=Path('runs'), help='parent of run folders')
     parser.add_argument('--no-record', action='store_true', help='do not write a bag')
     parser.add_argument('--gui', action='store_true', help='open the pybullet GUI')
-    parser.add_argument('--hold-from', type=float, default=HOLD_FROM, metavar='SECONDS',
+    parser.add_argument('--hold-from', type=float, default=None, metavar='SECONDS',
                         help='start of the window of the hold figures [s] '
-                             f'(default {HOLD_FROM:g})')
+                             f'(default {HOLD_FROM:g}; with --path {PATH_HOLD_FROM:g})')
     parser.add_argument('--stall-timeout', type=float, default=30.0, metavar='SECONDS',
                         help='stop the run when simulated time has not advanced for this '
                              'long (wall clock) [s] (default 30)')
@@ -57,10 +67,13 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     # A run has an end, which its figures need. The stall timeout may be infinite (never
     # give up on a slow sim).
-    if not (math.isfinite(args.duration) and args.duration > 0.0):
+    if args.duration is not None and not (math.isfinite(args.duration)
+                                          and args.duration > 0.0):
         raise UsageError(f'--duration must be a finite number > 0 [s], got {args.duration}')
     if not args.stall_timeout > 0.0:
         raise UsageError(f'--stall-timeout must be > 0, got {args.stall_timeout}')
+    if args.hold_from is None:
+        args.hold_from = HOLD_FROM if args.path is None else PATH_HOLD_FROM
     if not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:

@@ -14,8 +14,8 @@ from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
 import numpy as np
 
-__all__ = ['COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria', 'HOLD_FROM',
-           'HOLD_ROWS', 'METRIC_LABELS', 'TrackingMetrics', 'convergence_time',
+__all__ = ['ARRIVAL_ROWS', 'COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria',
+           'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'TrackingMetrics', 'convergence_time',
            'error_criteria', 'finite_or_none', 'format_metric', 'hold_metrics', 'metric_rows',
            'sample_durations', 'simulation_metrics', 'total_variation_rate',
            'tracking_metrics']
@@ -56,6 +56,10 @@ def metric_rows(fields) -> tuple:
     return tuple((METRIC_LABELS[name], name) for name in fields)
 
 
+#: A path's arrival figures in metrics tables: (label, TrackingMetrics field).
+ARRIVAL_ROWS = (('stopped at [s]', 'arrival_time'),
+                ('distance to the goal at rest [m]', 'arrival_position_error'),
+                ('|heading error| at the goal at rest [rad]', 'arrival_yaw_error'))
 #: The hold figures in metrics tables: (label, TrackingMetrics field).
 HOLD_ROWS = metric_rows(('hold_distance_p99', 'hold_distance_max', 'hold_theta_e_p99',
                          'hold_theta_e_max', 'hold_omega_tv', 'hold_omega_saturated',

@@ -12,7 +12,7 @@ plots. The last line printed is the bag directory. The command line is
 """
 
 import ctypes
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 import os
 from pathlib import Path
@@ -23,9 +23,10 @@ import sys
 import time
 
 from lifecycle_msgs.srv import ChangeState, GetState
-from nfmr_dlsmc.analysis.evaluation import plant_run
+from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN, plant_run
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter
+from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
@@ -55,6 +56,8 @@ from nfmr_dlsmc.runtime.params import (
     load_params_file,
     NodeOptions,
     ParamsFileError,
+    PATH,
+    path_file,
 )
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
@@ -103,8 +106,8 @@ class RunOptions:
         ``config/robot_case1.yaml``).
     mode : str
         ``'lockstep'`` or ``'realtime'``.
-    duration : float
-        Simulated time [s].
+    duration : float or None
+        Simulated time [s]; None: 100 s, or a path's duration and 5 s to arrive.
     out : Path
         Parent of the run folders.
     no_record : bool
@@ -124,6 +127,9 @@ class RunOptions:
     domain : int or None
         The ROS domain of the run; None: a free one of this host, discovery kept to this
         host (:mod:`nfmr_dlsmc.runtime.ros_domain`).
+    path : Path or None
+        A path file to follow instead of the file's trajectory (``--path``); the robot
+        starts at its first point, along it.
 
     """
 
@@ -139,6 +145,7 @@ class RunOptions:
     animate: bool = False
     sensing: str | None = None
     domain: int | None = None
+    path: Path | None = None
 
 
 def run(options: RunOptions) -> int:
@@ -162,8 +169,16 @@ def run(options: RunOptions) -> int:
     """
     config = options.config or shipped_config('robot_case1.yaml')
     controller_flat = load_params_file(config, 'controller')
+    if options.path is not None:
+        options = replace(options, path=path_file(str(options.path)).absolute())
+        controller_flat |= _path_values(options.path)
     params = controller_params(controller_flat)
+    if options.duration is None:  # a path's own (to the next 0.1 s), else the paper's
+        duration = getattr(params.trajectory, 'duration', PAPER_DURATION - PATH_MARGIN)
+        options = replace(options, duration=math.ceil(10.0 * (duration + PATH_MARGIN)) / 10.0)
     sim_flat = load_params_file(config, 'sim')
+    if options.path is not None:
+        sim_flat['initial_pose'] = list(params.trajectory.start_pose)
     if options.sensing is not None:
         sim_flat = with_sensing(sim_flat, options.sensing)
     settings = robot_plant('pybullet').settings(sim_flat)
@@ -219,8 +234,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     clock = _ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
-        children = [_start_child('sim', 'nfmr_sim.ros.sim_node', _sim_args(config, options),
-                                 run_dir),
+        children = [_start_child('sim', 'nfmr_sim.ros.sim_node',
+                                 _sim_args(config, options, settings.initial_pose), run_dir),
                     _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
                                  _controller_args(config, options, settings.world),
                                  run_dir)]
@@ -230,7 +245,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         controller.change('configure')
         controller.change('activate')
         real_time_factor = _wait_for_run(children, clock, options.duration,
-                                         options.stall_timeout, stop)
+                                         options.stall_timeout, stop,
+                                         settings.world.physics_dt)
         # The sim has stopped stepping at the duration: let the last command arrive, then
         # stop the controller (zero speed) well within its odometry timeout, so that a run
         # that ended as planned ends without a safety stop.
@@ -264,9 +280,14 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     return status
 
 
-def _sim_args(config: Path, options: RunOptions) -> list[str]:
+def _path_values(path: Path) -> dict:
+    """Return the controller parameters that follow the path file ``path``."""
+    return {'trajectory.name': PATH, 'trajectory.path.file': str(path)}
+
+
+def _sim_args(config: Path, options: RunOptions, initial_pose) -> list[str]:
     """
-    Return the sim's ROS arguments.
+    Return the sim's ROS arguments (with ``--path``, the start pose of the path's).
 
     In lockstep a step waits for its command as long as the run waits for simulated time
     to move (``--stall-timeout``): a step taken without its command, because a busy machine
@@ -281,7 +302,9 @@ def _sim_args(config: Path, options: RunOptions) -> list[str]:
             '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
             '-p', f'max_time:={float(options.duration)!r}',
             *(arg for key, value in _sensing_values(options.sensing).items()
-              for arg in ('-p', f'{key}:={float(value)!r}'))]
+              for arg in ('-p', f'{key}:={float(value)!r}')),
+            *(('-p', f'initial_pose:={[float(v) for v in initial_pose]!r}')
+              if options.path is not None else ())]
 
 
 def _sensing_values(preset: str | None) -> dict:
@@ -294,7 +317,10 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
     # On the sim's time in both modes: the trajectory runs on simulated time, so a sim
     # slower than real time slows the run down instead of breaking it.
     args = ['--ros-args', '--params-file', str(config), '-p', 'autostart:=false',
-            '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true']
+            '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true',
+            *(arg for key, value in (_path_values(options.path).items()
+                                     if options.path is not None else ())
+              for arg in ('-p', f'{key}:={value}'))]
     if options.mode == 'realtime':
         return [*args, '-p', 'tick_source:=clock']
     odometry = world.disturbance
@@ -459,9 +485,11 @@ def _robot_mismatch(params, settings) -> str | None:
 
 
 def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
-                  stall_timeout: float, stop: StopRequest) -> float:
+                  stall_timeout: float, stop: StopRequest, step: float) -> float:
     """
     Spin until the sim reaches ``duration``, showing progress.
+
+    Reached as the sim stops at ``max_time``: within half a physics ``step`` [s] of it.
 
     Returns
     -------
@@ -502,13 +530,14 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
                            f'{now - last_progress:.1f} s (--stall-timeout {stall_timeout:g} s); '
                            f'the {sim.name} process stopped stepping; last lines of '
                            f'{sim.log}:\n{sim.tail()}')
-        if now - last_print > 0.5 or sim_t >= duration:
+        done = sim_t >= duration - 0.5 * step
+        if now - last_print > 0.5 or done:
             wall = now - clock.started
             print(f'\rsim {sim_t:7.2f} / {duration:g} s   real-time factor '
                   f'{sim_t / wall if wall > 0 else 0.0:5.2f}', end='', file=sys.stderr,
                   flush=True)
             last_print = now
-        if sim_t >= duration:
+        if done:
             break
     print(file=sys.stderr)
     if first is None or now <= first[0]:
@@ -645,16 +674,19 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
     _, segments = last_segment(series)
     for note in run_notes(skipped, segments):
         print(f'nfmr-run: warning: {note}', file=sys.stderr)
+    goal = getattr(params.trajectory, 'end_pose', None)
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
-                                              steer_joint_rates(contents)))]
+                                              steer_joint_rates(contents), goal))]
     runs = [('ROS pybullet', series)]
     if not options.no_compare:
         print('the same scenario in this process: pybullet, then the kinematic model ...',
               file=sys.stderr, flush=True)
         for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
-            sim = plant_run(plant, DlsmcController(params.dlsmc), params, params.trajectory,
+            controller = with_arrival(DlsmcController(params.dlsmc), params.trajectory,
+                                      params.arrival)
+            sim = plant_run(plant, controller, params, params.trajectory,
                             settings.initial_pose, options.duration, settings.world)
-            columns.append((label, simulation_metrics(sim, options.hold_from)))
+            columns.append((label, simulation_metrics(sim, options.hold_from, goal)))
             plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
                        'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
                        'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}

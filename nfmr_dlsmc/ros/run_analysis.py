@@ -25,6 +25,7 @@ from nfmr_dlsmc.bag.reader import BagContents, BagError, read_bag
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.metrics import (
+    ARRIVAL_ROWS,
     format_metric,
     HOLD_FROM,
     HOLD_ROWS,
@@ -214,7 +215,7 @@ def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | 
 
 
 def state_metrics(series: dict, hold_from: float = HOLD_FROM,
-                  joint_rates: tuple | None = None) -> TrackingMetrics:
+                  joint_rates: tuple | None = None, goal=None) -> TrackingMetrics:
     """
     Return the :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the ticks of a run.
 
@@ -223,7 +224,8 @@ def state_metrics(series: dict, hold_from: float = HOLD_FROM,
     hold figures use the state's saturation flags and steer angles (bags recorded before
     the state carried them have no steer figure) and, with ``joint_rates`` from
     :func:`steer_joint_rates`, the measured steer joint rates stamped at or after
-    ``hold_from`` (sim time, which starts with trajectory time within a step).
+    ``hold_from`` (sim time, which starts with trajectory time within a step). With
+    ``goal`` (a path's last pose) and the state's ``arrival``, the arrival figures.
     """
     series, _ = last_segment(series)
     keep = series['stopped'] == 0.0
@@ -233,7 +235,8 @@ def state_metrics(series: dict, hold_from: float = HOLD_FROM,
     metrics = tracking_metrics(s['t'], s['x'], s['y'], s['theta'], s['x_d'], s['y_d'],
                                s['theta_d'], s['theta_r'], s['v'], s['omega'],
                                sample_durations(s['t']), hold_from, s.get('omega_saturated'),
-                               steer)
+                               steer, None, s.get('arrival') if goal is not None else None,
+                               goal)
     if joint_rates is not None:
         stamps, rates = joint_rates
         after = stamps >= hold_from
@@ -341,6 +344,13 @@ def metrics_table(columns: list) -> str:
     for row, key in TABLE_ROWS:
         cells = [f' {format_metric(getattr(metrics, key)):>{width}}' for _, metrics in columns]
         lines.append(f'{row:<40}' + ''.join(cells))
+    if any(metrics.arrival for _, metrics in columns):  # a path: how each run ended
+        lines.append(f"{'end of the path':<40}" + ''.join(
+            f" {metrics.arrival or '—':>{width}}" for _, metrics in columns))
+        for row, key in ARRIVAL_ROWS:
+            cells = [f' {format_metric(getattr(metrics, key)):>{width}}'
+                     for _, metrics in columns]
+            lines.append(f'{row:<40}' + ''.join(cells))
     return '\n'.join(lines)
 
 
