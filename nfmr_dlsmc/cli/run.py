@@ -36,8 +36,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="the robot's odometry from a preset instead of the file's sim "
                              'section (ideal, good, harsh); metrics are of the ground truth')
     parser.add_argument('--duration', type=float, default=None,
-                        help="simulated time [s] (default: 100, or with a path its own "
-                             "duration and 5 s to arrive)")
+                        help='simulated time [s] (default: 100, or with a path its own '
+                             'duration and 5 s to arrive)')
     parser.add_argument('--path', type=Path, default=None, metavar='FILE',
                         help='follow this path file (CSV x,y or t,x,y, or YAML) instead of '
                              "the file's trajectory, from its first point, and stop at its "
