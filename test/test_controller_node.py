@@ -356,6 +356,8 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
     new = followed[-1].poses
     assert (new[0].pose.position.x, new[0].pose.position.y) == pytest.approx((1.0, 4.0))
     assert (new[-1].pose.position.x, new[-1].pose.position.y) == pytest.approx((3.0, 6.0))
+    q = new[-1].pose.orientation  # at rest at the goal, along the path's last segment
+    assert 2.0 * math.atan2(q.z, q.w) == pytest.approx(math.pi / 2, abs=0.01)
     n = len(peer.states)
     drive(peer, 3, start_t=0.010)
     states = [dict(zip(labels, m.data)) for _, m in peer.states[n:]]

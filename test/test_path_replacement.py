@@ -67,6 +67,8 @@ def test_a_new_path_starts_at_the_next_tick_from_where_the_robot_is():
         if out.state[FIELD['arrival']]:
             break
     assert out.state[FIELD['arrival']] == 1.0 and out.v == 0.0  # arrived
+    # At rest the reference still has a heading: the path's at its end, not atan2(0, 0).
+    assert out.state[FIELD['theta_r']] == pytest.approx(math.pi / 2, abs=0.01)
     assert math.dist(plant.pose[:2], reference.end_pose[:2]) <= 0.005
 
 

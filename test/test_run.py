@@ -408,3 +408,11 @@ def test_a_path_file_is_followed_from_its_start_and_the_run_says_how_it_ended(tm
     # The robot starts at the path's first point, along it: no error to begin with.
     assert (first['x'], first['y']) == pytest.approx((2.0, 1.0), abs=1e-3)
     assert first['theta'] == pytest.approx(math.atan2(0.1, 0.2), abs=1e-3)
+    # nfmr-analyze finds the goal in the bag (the last reference_path) and agrees.
+    proc = subprocess.run([str(Path(sys.executable).parent / 'nfmr-analyze'), str(bag)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    labels = ('end of the path', 'stopped at', 'distance to the goal at rest',
+              '|heading error| at the goal at rest')
+    printed = {k: cells[0] for k, cells in table_columns(stdout, labels).items()}
+    assert {k: cells[0] for k, cells in table_columns(proc.stdout, labels).items()} == printed

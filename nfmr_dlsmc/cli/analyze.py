@@ -29,7 +29,9 @@ from nfmr_dlsmc.ros.run_analysis import (
     JOINT_TOPIC,
     last_segment,
     metrics_table,
+    path_goal,
     plot_runs,
+    REFERENCE_PATH_TOPIC,
     run_notes,
     state_metrics,
     state_series,
@@ -137,7 +139,7 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
 
     """
     topics = ANIMATION_TOPICS if animate else (STATE_TOPIC, JOINT_TOPIC, GROUND_TRUTH_TOPIC)
-    contents = read_bag(path, topics=list(topics))
+    contents = read_bag(path, topics=[*topics, REFERENCE_PATH_TOPIC])
     warning = contents.warning()
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
@@ -146,7 +148,8 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
     for note in run_notes(skipped, last_segment(series)[1]):
         print(f'nfmr-analyze: warning: {path}: {note}', file=sys.stderr)
     return {'path': str(path), 'label': _label(path), 'series': series,
-            'metrics': state_metrics(series, hold_from, steer_joint_rates(contents)),
+            'metrics': state_metrics(series, hold_from, steer_joint_rates(contents),
+                                     path_goal(contents, series)),
             'truncated': contents.truncated, 'contents': contents if animate else None}
 
 

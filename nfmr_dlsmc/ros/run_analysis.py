@@ -14,7 +14,7 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray
 import matplotlib
 import matplotlib.pyplot as plt
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path as PathMessage
 from nfmr_dlsmc.analysis.animation import (
     animate_run,
     AnimationConfig,
@@ -49,6 +49,7 @@ GROUND_TRUTH_TOPIC = '/ground_truth'
 DIAGNOSTICS_TOPIC = '/diagnostics'
 ODOM_TOPIC = '/odom'
 MARKER_TOPIC = '/robot_markers'
+REFERENCE_PATH_TOPIC = '/reference_path'
 #: The topics an animation reads.
 ANIMATION_TOPICS = (STATE_TOPIC, JOINT_TOPIC, GROUND_TRUTH_TOPIC, ODOM_TOPIC, MARKER_TOPIC)
 #: Time between the samples of an animated run between its frames [s].
@@ -212,6 +213,25 @@ def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | 
     if not stamps:
         return None
     return np.asarray(stamps), np.asarray(rates, dtype=float)
+
+
+def path_goal(contents: BagContents, series: dict) -> tuple | None:
+    """
+    Return the goal (x [m], y [m], yaw [rad]) of a run that ended at one, else None.
+
+    A run ended at a goal when its state's ``arrival`` is not 0 at the end; the goal is the
+    last pose of the last ``/reference_path``, the path it followed last.
+    """
+    arrival = series.get('arrival')
+    paths = contents.of(REFERENCE_PATH_TOPIC)
+    if arrival is None or not len(arrival) or arrival[-1] == 0.0 or not paths:
+        return None
+    poses = deserialize_message(paths[-1].data, PathMessage).poses
+    if not poses:
+        return None
+    pose = poses[-1].pose
+    q = pose.orientation
+    return pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w)
 
 
 def state_metrics(series: dict, hold_from: float = HOLD_FROM,

@@ -15,6 +15,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 from nfmr_dlsmc.core.footprint import chassis_corners, Footprint, wheel_centres
+from nfmr_dlsmc.core.path_reference import PathTrajectory
 from nfmr_dlsmc.core.steering import RobotGeometry
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import check_finite, check_positive
@@ -73,7 +74,9 @@ def reference_path(trajectory, duration_s: float, step_s: float, stamp: Time,
     count = math.ceil(duration / step - 1e-9)
     t = np.minimum(step * np.arange(count + 1), duration)
     x_d, y_d, xdot_d, ydot_d = trajectory.sample(t)
-    theta_r = reference_heading(xdot_d, ydot_d)
+    # A path has a heading also where it rests (its start and its goal).
+    theta_r = (trajectory.heading(t) if isinstance(trajectory, PathTrajectory)
+               else reference_heading(xdot_d, ydot_d))
     path = Path(header=_header(stamp, frame_id))
     path.poses = [PoseStamped(header=_header(stamp, frame_id)) for _ in t]
     for pose, x, y, yaw in zip(path.poses, x_d.tolist(), y_d.tolist(), theta_r.tolist()):

@@ -355,7 +355,11 @@ class TrackingSession:
                       f'{1e3 * self.controller.position_error:.1f} mm and '
                       f'{1e3 * abs(self.controller.yaw_error):.1f} mrad from the goal; '
                       'zero speed until a new reference')
-        state = (t, x, y, theta, x_d, y_d, float(reference_heading(xdot_d, ydot_d)),
+        trajectory = self.params.trajectory
+        # A path has a heading also where it rests (its start and its goal).
+        theta_r = (float(trajectory.heading(t)) if isinstance(trajectory, PathTrajectory)
+                   else float(reference_heading(xdot_d, ydot_d)))
+        state = (t, x, y, theta, x_d, y_d, theta_r,
                  ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
                  ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
                  ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
