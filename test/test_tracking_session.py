@@ -138,6 +138,18 @@ def test_a_tick_whose_estimate_overflows_stops_once_and_tracking_resumes_after()
     assert math.isfinite(back.v) and math.isfinite(back.omega) and back.v > 0.0
 
 
+def test_a_stamp_far_off_is_reported_in_a_short_line():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    _, out = feed(s, 1.0, 4.0, 8.99e307)
+    assert out.stopped and out.report == (
+        'stopping the robot: odometry stamp 8.990000e+307 s is +8.990000e+307 s from the last '
+        'accepted one: ignored until 3 messages in a row confirm a new time base')
+    _, out = feed(s, 1.0, 4.0, 0.001)
+    _, out = feed(s, 1.0, 4.0, 2.5)
+    assert '2.500 s is +2.499 s from the last accepted one' in out.report
+
+
 def test_stale_odometry_stops_and_fresh_odometry_resumes():
     s = session()
     feed(s, 1.0, 4.0, 0.0)

@@ -30,6 +30,14 @@ STATE_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_r', 'x_e', 'y_e', '
                 'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr', 'control_time', 'arrival')
 
 
+def _fixed(value: float, decimals: int, signed: bool = False) -> str:
+    """Return ``value`` with ``decimals`` decimals, or in exponent form beyond 1e12."""
+    sign = '+' if signed else ''
+    if abs(value) < 1e12:
+        return f'{value:{sign}.{decimals}f}'
+    return f'{value:{sign}.{decimals + 3}e}'
+
+
 @dataclass(frozen=True)
 class TickOutput:
     """
@@ -223,8 +231,9 @@ class TrackingSession:
                 return False  # out of order: ignore
             if abs(gap) >= self.restart_threshold:
                 if not self._confirms_new_base(stamp, control_time):
-                    self._bad_odometry = ('stamp', f'odometry stamp {stamp:.3f} s is {gap:+.3f} s '
-                                                   'from the last accepted one: ignored until '
+                    self._bad_odometry = ('stamp', f'odometry stamp {_fixed(stamp, 3)} s is '
+                                                   f'{_fixed(gap, 3, signed=True)} s from the '
+                                                   'last accepted one: ignored until '
                                                    f'{self.confirm_messages} messages in a row '
                                                    'confirm a new time base')
                     return True
@@ -236,8 +245,8 @@ class TrackingSession:
         elif self._pose is not None:
             jump = math.hypot(x - self._pose[0], y - self._pose[1])
             if jump > self.max_jump:
-                self._bad_odometry = ('jump', f'odometry jumped {jump:.2f} m in one message '
-                                              f'(limit {self.max_jump:g} m)')
+                self._bad_odometry = ('jump', f'odometry jumped {_fixed(jump, 2)} m in one '
+                                              f'message (limit {self.max_jump:g} m)')
                 return True
         self._bad_odometry = None
         self._pose = (x, y, theta)
