@@ -86,9 +86,13 @@ class SimSettings:
 
     @property
     def marker_every(self) -> int:
-        """Physics steps between two robot_markers messages (at least 1); 0: none."""
-        steps = (1.0 / (self.marker_rate * self.world.physics_dt) if self.marker_rate
-                 else math.inf)
+        """
+        Physics steps between two robot_markers messages (at least 1); 0: none.
+
+        None either for a rate so low that its period overflows (5e-324 Hz).
+        """
+        per_step = self.marker_rate * self.world.physics_dt
+        steps = 1.0 / per_step if per_step > 0.0 else math.inf
         return max(1, round(steps)) if math.isfinite(steps) else 0
 
 

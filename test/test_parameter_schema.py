@@ -134,3 +134,10 @@ def test_defaults_and_live_flags_of_the_nodes():
                     'disturbance.constant_force_y', 'disturbance.odom_position_noise',
                     'disturbance.odom_yaw_noise', 'disturbance.pulses'}
     assert (sim['initial_pose'].default, sim['disturbance.pulses'].default) == ([0.0] * 3, [])
+
+
+@pytest.mark.parametrize('rate, every', [(20.0, 50), (1e-3, 1_000_000), (1e6, 1), (0.0, 0),
+                                         (5e-324, 0)])
+def test_the_marker_rate_gives_whole_steps_or_none(rate, every):
+    # 5e-324 Hz: its period overflows, which is never (not a division by zero).
+    assert SimSettings(marker_rate=rate).marker_every == every

@@ -113,3 +113,13 @@ def test_invalid_geometry(kwargs, name):
     with pytest.raises(ParameterError) as info:
         RobotGeometry(**kwargs)
     assert info.value.parameter == name
+
+
+@pytest.mark.parametrize('j1', [-0.9999999, -0.95, -0.900001])
+def test_a_mode_next_to_crab_is_refused_for_the_point_it_would_track(j1):
+    # P lies (L/2)(1 - j1)/(1 + j1) behind the centre: 8900 km for the robot at -0.9999999.
+    with pytest.raises(ParameterError, match=r'steering.j1 = -0.9[0-9]*: must be -1 \(crab\) '
+                                             r'or >= -0.9: .* wheelbases behind'):
+        SteerMode(j1, 1.0 - j1)
+    near = SteerMode(-0.9, 1.9)
+    assert near.zero_slip_offset(GEOM.wheelbase) == pytest.approx(-9.5 * GEOM.wheelbase)

@@ -27,9 +27,10 @@ from nfmr_dlsmc.core.schema import (
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
-__all__ = ['RobotGeometry', 'SteerMode', 'WHEEL_NAMES', 'WheelCommands', 'centre_twist',
-           'front_steer_from_yaw_rate', 'steer_angle_series', 'unicycle_from_wheels',
-           'wheel_commands', 'wheel_commands_for_twist', 'yaw_rate_from_front_steer']
+__all__ = ['NEAR_CRAB_J1', 'RobotGeometry', 'SteerMode', 'WHEEL_NAMES', 'WheelCommands',
+           'centre_twist', 'front_steer_from_yaw_rate', 'steer_angle_series',
+           'unicycle_from_wheels', 'wheel_commands', 'wheel_commands_for_twist',
+           'yaw_rate_from_front_steer']
 
 #: Wheel order of every per-wheel array.
 WHEEL_NAMES = ('front_left', 'front_right', 'rear_left', 'rear_right')
@@ -69,6 +70,11 @@ class RobotGeometry:
         return np.array([[a, b], [a, -b], [-a, b], [-a, -b]])
 
 
+#: Least j1 but crab's -1 [-]: P lies (L/2)(1 - j1)/(1 + j1) behind the centre, 9.5
+#: wheelbases here and without bound towards -1 (8900 km for j1 = -0.9999999, L = 0.89 m).
+NEAR_CRAB_J1 = -0.9
+
+
 @documented
 @dataclass(frozen=True)
 class SteerMode:
@@ -85,6 +91,13 @@ class SteerMode:
 
     def __post_init__(self):
         check_fields(self)
+        if -1.0 < self.j1 < NEAR_CRAB_J1:
+            behind = 0.5 * (1.0 - self.j1) / (1.0 + self.j1)  # [wheelbases]
+            raise ParameterError(f'{self.prefix}.j1', self.j1,
+                                 f'must be -1 (crab) or >= {NEAR_CRAB_J1:g}: between them the '
+                                 'point P with no side-slip, which the DLSMC tracks, lies '
+                                 f'{behind:.3g} wheelbases behind the chassis centre (at most '
+                                 f'{0.5 * (1.0 - NEAR_CRAB_J1) / (1.0 + NEAR_CRAB_J1):g})')
         if not math.isclose(self.j1 + self.j2, 1.0, abs_tol=1e-9):
             raise ParameterError(f'{self.prefix}.j2', self.j2,
                                  f'must equal 1 - j1 = {1.0 - self.j1:g}')
