@@ -79,7 +79,7 @@ class SimSettings:
                                          'that nobody misses the start', at_least(0),
                                          read_only=True)
     max_time: float = param(0.0, 's', 'stop stepping (the node stays up) at this simulated '
-                            'time; 0: never', NON_NEGATIVE)
+                            'time, until it is raised; 0: never', NON_NEGATIVE)
 
     def __post_init__(self):
         check_fields(self)

@@ -148,3 +148,22 @@ def test_a_reset_while_paused_shows_once_resumed(ros_context):
         assert _pose_error(driver.odom[-1])[0] < 0.001
     finally:
         stop(sim, driver, executor)
+
+
+def test_a_sim_at_max_time_steps_on_when_it_is_raised(ros_context):
+    from rclpy.parameter import Parameter
+
+    sim, driver, executor = start(ros_context, mode='lockstep', lockstep_timeout=0.002,
+                                  max_time=0.05)
+    try:
+        wait_for(lambda: sim.at_max_time, timeout=30)
+        reply = _call(driver, SetBool, '/sim/pause', SetBool.Request(data=False))
+        assert reply.message == ('already running at 0.050 s of simulated time; stepping '
+                                 'stands at max_time 0.05 s until it is raised')
+        result = sim.set_parameters([Parameter('max_time', value=0.1)])[0]
+        assert result.successful, result.reason
+        wait_for(lambda: sim.at_max_time and sim.world.time > 0.09, timeout=30)
+        assert sim.world.time == pytest.approx(0.1, abs=1e-9)
+        assert sim.failure is None
+    finally:
+        stop(sim, driver, executor)

@@ -113,6 +113,7 @@ class SimNode(SchemaNode):
         # notified when the sim resumes.
         self._control = threading.Condition()
         self._paused = False
+        self.at_max_time = False  # whether stepping stands at max_time
         self.create_service(Trigger, '~/reset', self._on_reset)
         self.create_service(SetBool, '~/pause', self._on_pause)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -163,6 +164,9 @@ class SimNode(SchemaNode):
         response.success = True
         response.message = (f"{'already ' if already else ''}{state} at {now:.3f} s of "
                             f'simulated time')
+        if self.at_max_time:
+            response.message += (f'; stepping stands at max_time {self.settings.max_time:g} s '
+                                 'until it is raised')
         if not already:
             self.get_logger().info(response.message)
         return response
@@ -236,13 +240,25 @@ class SimNode(SchemaNode):
             self._publish(replace(self.world.observe(), odometry=self.world.first_odometry()),
                           aux=True)
         pacer = RealtimePacer(s.world.physics_dt, s.realtime_max_lag, time.monotonic())
+        held = False  # whether stepping stands at max_time
         while self._stepper.running.is_set():
             with self._control:
                 self._apply_pending()
             s = self.settings
             if s.max_time and self.world.time >= s.max_time - 0.5 * s.world.physics_dt:
-                self.get_logger().info(f'reached max_time {s.max_time:g} s: stepping stopped')
-                return  # the node stays up, so everything published so far is delivered
+                # The node stays up, so everything published so far is delivered; a larger
+                # max_time (or 0) set live steps on from here.
+                if not held:
+                    self.get_logger().info(f'reached max_time {s.max_time:g} s: stepping '
+                                           'stopped until max_time is raised')
+                    held = self.at_max_time = True
+                with self._control:
+                    self._control.wait(PAUSE_POLL)
+                continue
+            if held:
+                held = self.at_max_time = False
+                self.get_logger().info(f'max_time now {s.max_time:g} s: stepping on')
+                pacer.resume(time.monotonic())  # no catching up on the time held
             if s.mode == 'lockstep':
                 self._wait_for_step_command(s.lockstep_timeout)
             else:
