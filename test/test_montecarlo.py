@@ -67,6 +67,34 @@ def test_paper_law_keeps_the_batch_and_its_summary(capsys):
     assert all(math.isfinite(run['iae']) for run in summary['runs'])
 
 
+def test_along_a_path_success_is_arriving_and_each_start_ends_as_it_does_alone(
+        capsys, tmp_path):
+    from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival
+    from nfmr_dlsmc.runtime.params import PATH
+
+    path = tmp_path / 'ahead.csv'
+    path.write_text('x,y\n0,0\n2,0\n3,1\n')
+    summary = _summary(capsys, '--params', ROBOT, '--path', str(path), '--n', '3',
+                       '--x0-range', '0.2,0.2,0.2', '--jobs', '2')
+    params = controller_params(load_params_file(ROBOT) | {'trajectory.name': PATH,
+                                                          'trajectory.path.file': str(path)})
+    duration = params.trajectory.duration + 5.0  # the path's own, and 5 s to arrive
+    assert summary['criterion'] == 'arrives at the end of the path'
+    assert summary['duration'] == pytest.approx(duration)
+    for run in summary['runs']:
+        assert max(abs(a - b) for a, b in zip(run['x0'], (0.0, 0.0, 0.0))) <= 0.2
+        controller = with_arrival(DlsmcController(params.dlsmc), params.trajectory,
+                                  params.arrival)
+        alone = simulation_metrics(simulate(controller, params.trajectory, run['x0'],
+                                            duration, params.dlsmc.dt),
+                                   duration - 10.0, params.trajectory.end_pose)
+        assert ARRIVAL_OUTCOMES[run['outcome']] == alone.arrival
+        assert run['arrival_position_error'] == pytest.approx(alone.arrival_position_error)
+        assert run['success'] == (alone.arrival == 'arrived')
+    assert sum(summary['outcomes'].values()) == 3
+    assert summary['success_rate'] == summary['outcomes']['arrived'] / 3
+
+
 @pytest.mark.parametrize('argv, text', [
     (['--hold-last', '0'], 'argument --hold-last: must be a finite number > 0'),
     (['--plant', 'tractor'], 'argument --plant: invalid choice'),

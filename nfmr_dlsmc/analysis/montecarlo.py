@@ -11,13 +11,16 @@ over the processes. On pybullet each start is one
 
 Success: on the kinematic model the distance error converges to 1 mm (it is last above
 1 mm before the end); on pybullet the robot holds the path: the distance error stays
-within 1 cm over the last ``hold_last`` seconds.
+within 1 cm over the last ``hold_last`` seconds. Along a path (which ends at rest, one run
+per start: the batch simulator has no arrival rule) success is arriving at its end
+(:mod:`nfmr_dlsmc.core.arrival`), on either plant.
 """
 
 from concurrent.futures import as_completed
 import math
 from pathlib import Path
 
+from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, simulation_metrics
@@ -32,11 +35,23 @@ import numpy as np
 #: distance [m], 99th percentile and maximum of the distance over the last hold_last s [m].
 RUN_KEYS = ('t_conv', 't_conv_1cm', 'iae', 'final_distance', 'hold_distance_p99',
             'hold_distance_max')
+#: Along a path also: how the run ended (a key of ARRIVAL_OUTCOMES), when [s], and the
+#: distance [m] and |heading error| [rad] to the goal at rest.
+PATH_RUN_KEYS = (*RUN_KEYS, 'outcome', 'arrival_time', 'arrival_position_error',
+                 'arrival_yaw_error')
+_OUTCOME_CODES = {name: code for code, name in ARRIVAL_OUTCOMES.items()}
+_ARRIVED = _OUTCOME_CODES['arrived']
 
 
-def uses_batch(plant: str, config: DlsmcConfig) -> bool:
-    """Return whether the starts run in the batch simulator (the paper's law, kinematic)."""
-    return plant == 'kinematic' and config.is_paper_law
+def uses_batch(plant: str, config: DlsmcConfig, trajectory=None) -> bool:
+    """
+    Return whether the starts run in the batch simulator.
+
+    The paper's law on the kinematic model, along a reference without an end (the batch
+    simulator has no arrival rule).
+    """
+    return (plant == 'kinematic' and config.is_paper_law
+            and getattr(trajectory, 'end_pose', None) is None)
 
 
 def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
@@ -71,17 +86,18 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     -------
     dict
         Figure -> array in the order of ``starts``: those of :data:`RUN_KEYS` (NaN where
-        undefined); the batch simulator gives ``t_conv``, ``iae`` and ``final_distance``.
+        undefined), along a path :data:`PATH_RUN_KEYS`; the batch simulator gives
+        ``t_conv``, ``iae`` and ``final_distance``.
 
     """
-    if uses_batch(plant, params.dlsmc):
+    if uses_batch(plant, params.dlsmc, params.trajectory):
         result = simulate_batch_parallel(params.dlsmc, params.trajectory, starts, duration,
                                          disturbance, jobs=jobs)
         return {'t_conv': result.t_conv, 'iae': result.iae,
                 'final_distance': result.final_distance}
     tasks = [(tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
-              hold_last, world, params.geometry, params.steering, params.estimator)
-             for x0 in starts.tolist()]
+              hold_last, world, params.geometry, params.steering, params.estimator,
+              params.arrival) for x0 in starts.tolist()]
     rows = [None] * len(tasks)
     with worker_pool(jobs, quiet=True) as pool:
         futures = {pool.submit(_run_start, task): k for k, task in enumerate(tasks)}
@@ -89,7 +105,7 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
             k = futures[future]
             rows[k] = future.result()
             progress(done, len(tasks), tasks[k][0], rows[k])
-    return {key: np.array([row[key] for row in rows]) for key in RUN_KEYS}
+    return {key: np.array([row[key] for row in rows]) for key in rows[0]}
 
 
 def _run_start(task: tuple) -> dict:
@@ -97,20 +113,27 @@ def _run_start(task: tuple) -> dict:
     Run one start in a worker process: the :data:`RUN_KEYS` figures (NaN where undefined).
 
     ``task`` is (x0, plant, DlsmcConfig, trajectory, duration [s], disturbance, hold_last
-    [s], world, geometry, steering, estimator); the last four are used on pybullet only.
-    The hold figures cover the last ``hold_last`` seconds (the whole run if it is shorter).
+    [s], world, geometry, steering, estimator, arrival); world to estimator are used on
+    pybullet only, arrival along a path only (then :data:`PATH_RUN_KEYS`). The hold figures
+    cover the last ``hold_last`` seconds (the whole run if it is shorter).
     """
     x0, plant, config, trajectory, duration, disturbance, hold_last, world, geometry, \
-        steering, estimator = task
-    controller = DlsmcController(config)
+        steering, estimator, arrival = task
+    goal = getattr(trajectory, 'end_pose', None)
+    controller = with_arrival(DlsmcController(config), trajectory, arrival)
     if plant == 'pybullet':
         result = robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
                                                   geometry, steering, disturbance, None,
                                                   estimator)
     else:
         result = simulate(controller, trajectory, x0, duration, config.dt, disturbance)
-    figures = simulation_metrics(result, hold_from=max(duration - hold_last, 0.0)).as_dict()
-    return {key: math.nan if figures[key] is None else float(figures[key]) for key in RUN_KEYS}
+    figures = simulation_metrics(result, max(duration - hold_last, 0.0), goal).as_dict()
+    if goal is None:
+        keys = RUN_KEYS
+    else:
+        keys = PATH_RUN_KEYS
+        figures['outcome'] = _OUTCOME_CODES[figures['arrival']]
+    return {key: math.nan if figures[key] is None else float(figures[key]) for key in keys}
 
 
 def time_key(plant: str) -> str:
@@ -123,8 +146,10 @@ def success_of(plant: str, runs: dict) -> np.ndarray:
     Return per start whether it succeeded.
 
     Kinematic: the distance converges to 1 mm before the end; pybullet: it stays within
-    1 cm over the hold window (the last ``hold_last`` seconds).
+    1 cm over the hold window (the last ``hold_last`` seconds). Along a path: it arrived.
     """
+    if 'outcome' in runs:
+        return runs['outcome'] == _ARRIVED
     if plant == 'pybullet':
         return runs['hold_distance_max'] <= COARSE_TOLERANCE
     return np.isfinite(runs['t_conv'])
@@ -149,10 +174,15 @@ def summarise(plant: str, starts: np.ndarray, runs: dict, duration: float,
     criterion = (f'within {100 * COARSE_TOLERANCE:g} cm over the last '
                  f'{min(hold_last, duration):g} s'
                  if plant == 'pybullet' else 'converges to 1 mm')
+    if 'outcome' in runs:
+        criterion = 'arrives at the end of the path'
+        counts = {name: int(np.sum(runs['outcome'] == code))
+                  for code, name in ARRIVAL_OUTCOMES.items()}
     return {'plant': plant, 'criterion': criterion, 'n': len(starts),
             'success_rate': float(success.mean()), 'duration': duration,
+            **({'outcomes': counts} if 'outcome' in runs else {}),
             **{key: _percentiles(values) for key, values in runs.items()
-               if key != 'final_distance'},
+               if key not in ('final_distance', 'outcome')},
             'worst': [rows[k] for k in worst], 'runs': rows}
 
 
@@ -173,11 +203,15 @@ def format_summary(summary: dict) -> str:
     key = time_key(summary['plant'])
     lines = [f"success rate ({summary['criterion']}): {100 * summary['success_rate']:.1f} % "
              f"of {summary['n']}"]
+    if 'outcomes' in summary:
+        lines.append('ended: ' + ', '.join(f'{name} {count}'
+                                           for name, count in summary['outcomes'].items()))
     for figure, unit in (('t_conv', 's'), ('t_conv_1cm', 's'), ('hold_distance_p99', 'm'),
-                         ('iae', 'm*s')):
+                         ('iae', 'm*s'), ('arrival_time', 's'),
+                         ('arrival_position_error', 'm'), ('arrival_yaw_error', 'rad')):
         dist = summary.get(figure)
         if dist:
-            lines.append(f"{figure:<17} [{unit}] ({dist['count']} of {summary['n']}): "
+            lines.append(f"{figure:<22} [{unit}] ({dist['count']} of {summary['n']}): "
                          + ', '.join(f'{k} {v:.4g}' for k, v in dist.items() if k != 'count'))
     lines.append('worst starts:')
     for w in summary['worst']:

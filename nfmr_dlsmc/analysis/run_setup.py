@@ -54,7 +54,13 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None):
 
 
 def start_pose(trajectory) -> np.ndarray:
-    """Return where ``trajectory`` starts: x_d [m], y_d [m] and its heading [rad] at t = 0."""
+    """
+    Return where ``trajectory`` starts: x_d [m], y_d [m] and its heading [rad] at t = 0.
+
+    A path starts at rest: its heading there is its tangent's.
+    """
+    if getattr(trajectory, 'start_pose', None) is not None:
+        return np.array(trajectory.start_pose, dtype=float)
     x_d0, y_d0, xdot0, ydot0 = (float(v) for v in trajectory.sample(0.0))
     return np.array([x_d0, y_d0, math.atan2(ydot0, xdot0)])
 

@@ -13,6 +13,7 @@ import sys
 import time
 
 from nfmr_dlsmc.analysis.comparison_scenarios import PLANTS
+from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.analysis.montecarlo import (
     format_summary,
     plot_starts,
@@ -37,7 +38,7 @@ from nfmr_dlsmc.cli.common import (
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file, PATH, path_file
 import numpy as np
 
 
@@ -61,8 +62,11 @@ def _parser() -> argparse.ArgumentParser:
                         default=(5.0, 5.0, math.pi), metavar='DX,DY,DTH',
                         help='starts uniform in +-DX [m], +-DY [m], +-DTH [rad] around the '
                              'trajectory start (default 5,5,pi)')
-    parser.add_argument('--duration', type=positive_number, default=100.0,
-                        help='[s] (default 100)')
+    parser.add_argument('--path', type=Path, default=None, metavar='FILE',
+                        help="a path file to follow instead of the file's trajectory (starts "
+                             'around its first point; success: arriving at its end)')
+    parser.add_argument('--duration', type=positive_number, default=None,
+                        help="[s] (default 100; with --path the path's duration and 5 s)")
     parser.add_argument('--hold-last', type=positive_number, default=10.0, metavar='SECONDS',
                         help='window at the end of each run over which the distance must '
                              'stay within 1 cm (pybullet success) and over which the '
@@ -91,7 +95,13 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    params = controller_params(load_params_file(args.params) if args.params else {})
+    flat = load_params_file(args.params) if args.params else {}
+    if args.path is not None:
+        flat |= {'trajectory.name': PATH, 'trajectory.path.file': str(path_file(str(args.path)))}
+    params = controller_params(flat)
+    if args.duration is None:  # a path's own and a margin to arrive, else the paper's
+        args.duration = getattr(params.trajectory, 'duration',
+                                PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
     check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.n))
     check_memory(args.n * BATCH_ROBOT_BYTES, f'--n {args.n} starts')
     if args.plots:
@@ -103,7 +113,8 @@ def _run(args) -> int:
              if args.plant == 'pybullet' else None)
     origin = start_pose(params.trajectory)
     starts = random_starts(np.random.default_rng(args.seed), origin, args.x0_range, args.n)
-    how = ('batch simulator' if uses_batch(args.plant, params.dlsmc) else
+    batch = uses_batch(args.plant, params.dlsmc, params.trajectory)
+    how = ('batch simulator' if batch else
            f'one {args.plant} run per start on {args.jobs} processes'
            + ('' if args.plant == 'pybullet' else
               " (robot profile: the batch simulator implements the paper's law only)"))
@@ -112,7 +123,7 @@ def _run(args) -> int:
     runs = run_starts(args.plant, params, world, starts, args.duration,
                       disturbance_by_name(args.disturbance), args.hold_last, args.jobs,
                       _progress(begin, args.plant))
-    if not uses_batch(args.plant, params.dlsmc):
+    if not batch:
         print(file=sys.stderr)  # after the progress line
     elapsed = time.perf_counter() - begin
     summary = {'plant': args.plant, 'params': args.params,
