@@ -141,3 +141,11 @@ def test_defaults_and_live_flags_of_the_nodes():
 def test_the_marker_rate_gives_whole_steps_or_none(rate, every):
     # 5e-324 Hz: its period overflows, which is never (not a division by zero).
     assert SimSettings(marker_rate=rate).marker_every == every
+
+
+def test_a_frame_name_of_megabytes_is_refused_by_its_length_not_printed_whole():
+    with pytest.raises(ParameterError) as info:
+        NodeOptions(odom_frame='x' * 5_000_000)
+    assert str(info.value) == ("odom_frame = 'xxxxxxxxxxxxxxxx... (5000000 characters)': must "
+                               'be a frame name of at most 256 characters')
+    assert NodeOptions(odom_frame='x' * 256).odom_frame == 'x' * 256

@@ -378,14 +378,23 @@ def at_least(lowest: int) -> Rule:
     return Rule(f'integer >= {lowest}', check)
 
 
-def non_empty(what: str) -> Rule:
-    """Return the rule: a non-empty string, ``what`` it names (``a frame name``)."""
+def non_empty(what: str, max_length: int | None = None) -> Rule:
+    """
+    Return the rule: a non-empty string, ``what`` it names (``a frame name``).
+
+    With ``max_length``, of at most that many characters; a longer one is named by its
+    first characters and its length.
+    """
     def check(name, value, unit):
         if not isinstance(value, str) or not value:
             raise ParameterError(name, value, f'must be {what}', unit)
+        if max_length is not None and len(value) > max_length:
+            raise ParameterError(name, f'{value[:16]}... ({len(value)} characters)',
+                                 f'must be {what} of at most {max_length} characters', unit)
         return value
 
-    return Rule(what, check)
+    text = what if max_length is None else f'{what} of at most {max_length} characters'
+    return Rule(text, check)
 
 
 def vector(*names: str) -> Rule:

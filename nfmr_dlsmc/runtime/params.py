@@ -118,7 +118,7 @@ class NodeOptions:
     odom_timeout: float = param(0.25, 's', 'odometry older than this stops the robot (wall '
                                 'clock; simulated time with tick_source sim_clock)', POSITIVE)
     odom_frame: str = param('odom', '', 'frame odometry must be in; other frames stop the '
-                            'robot', non_empty('a frame name'))
+                            'robot', non_empty('a frame name', 256))
     max_odom_jump: float = param(10.0, 'm', 'larger position jumps between odometry '
                                  'messages stop the robot', POSITIVE)
     restart_threshold: float = param(1.0, 's', 'a stamp this far off the time base, three '
