@@ -7,7 +7,7 @@ Whatever odometry arrives and whatever (v, omega) the mapping is asked for.
 import math
 from pathlib import Path
 
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.runtime.params import controller_params, ControllerParams, load_params_file
@@ -22,9 +22,30 @@ ROBOT = controller_params(
     load_params_file(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml'))
 
 
+#: Odometry found to break the guards once: a tick at 9e307 s overflowed the estimator's
+#: prediction; a first stamp of -1.1e308 s overflowed its replay and its wrapping of yaw;
+#: a yaw of 1.8e308 then -4.3e299 overflowed the yaw innovation.
+_AT_REST = (0.0, 0.0, 0.0)
+_FOUND = [
+    [(*_AT_REST, 0.0, 'odom')] * 4 + [(*_AT_REST, t, 'odom') for t in (
+        244.0, 0.0, 8.99166877157097e+307, 0.0)],
+    [(*_AT_REST, 0.0, 'map')] * 3 + [(*_AT_REST, t, 'odom') for t in (
+        -1.1306246131209533e+308, 0.0, 0.0, 0.0)],
+    [(*_AT_REST, 0.0, 'map')] * 3 + [(*_AT_REST, t, 'odom') for t in (
+        -1.1306246131209533e+308, -1.0, 0.0)],
+    [(*_AT_REST, 0.0, 'map')] * 2 + [
+        (1.7976931305662148e+308, 0.0, 1.7976931305662148e+308, 0.0, 'odom'),
+        (1.7976931305662148e+308, 0.0, -4.296101052089981e+299, 0.0, 'odom')],
+]
+
+
 @settings(max_examples=300, deadline=None)
 @given(st.lists(st.tuples(ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FRAME),
                 min_size=1, max_size=12), st.sampled_from(['paper', 'robot']))
+@example(_FOUND[0], 'robot')
+@example(_FOUND[1], 'robot')
+@example(_FOUND[2], 'robot')
+@example(_FOUND[3], 'robot')
 def test_any_odometry_gives_a_finite_command_or_a_stop(messages, profile):
     params = ControllerParams() if profile == 'paper' else ROBOT
     session = TrackingSession(params, odom_timeout=0.25)

@@ -30,6 +30,8 @@ import numpy as np
 
 __all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR']
 
+#: The state (x, P) of an estimate that overflowed (a prediction over an absurd time).
+_OVERFLOWED = (np.full(3, math.nan), np.full((3, 3), math.nan))
 #: Least standard deviation [m, rad] a message's covariance is taken to say: exact odometry
 #: (a zero covariance) is trusted to a micrometre and a microradian.
 SIGMA_FLOOR = 1e-6
@@ -126,6 +128,8 @@ class PoseEstimator:
         """Predict over ``dt`` [s] with input u = (v, omega): eq. (3), forward Euler."""
         if dt <= 0.0:
             return x, P
+        if not (math.isfinite(x[2]) and math.isfinite(dt)):
+            return _OVERFLOWED  # stays so: pose() reports it and the caller resets
         v, w = u
         c, s = math.cos(x[2]), math.sin(x[2])
         x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt])
@@ -144,7 +148,10 @@ class PoseEstimator:
         more the less the model explains it.
         """
         z, R = measured
-        innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(z[2] - x[2], math.tau)])
+        yaw_error = z[2] - x[2]
+        if not math.isfinite(yaw_error):
+            return _OVERFLOWED
+        innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(yaw_error, math.tau)])
         S = P + R
         S_inv = np.linalg.inv(S)
         gate = self.config.innovation_gate
