@@ -88,6 +88,9 @@ PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
 ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribers' acks
+#: Wall time [s] the telemetry of the last ticks waits on deactivate for its subscribers'
+#: acks: a recorder that fell behind on a busy machine still gets the end of the run.
+STATE_ACK_TIMEOUT = 5.0
 _REFERENCE_FIELDS = tuple(STATE_FIELDS.index(name) for name in ('x_d', 'y_d', 'theta_d'))
 _ARRIVAL_FIELD = STATE_FIELDS.index('arrival')
 
@@ -271,6 +274,7 @@ class ControllerNode(SchemaLifecycleNode):
         # take the zero command down with the process).
         for publisher in (self._twist_pub, self._wheel_pub, self._steer_pub):
             publisher.wait_for_all_acked(Duration(seconds=ZERO_ACK_TIMEOUT))
+        self._state_pub.wait_for_all_acked(Duration(seconds=STATE_ACK_TIMEOUT))
         self._drop_active_entities()
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 
