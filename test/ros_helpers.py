@@ -69,9 +69,9 @@ def wait_matched(*endpoints, timeout=30.0):
 _CONTEXTS = weakref.WeakSet()
 
 
-def new_context():
+def new_context(args=None):
     context = rclpy.Context()
-    rclpy.init(context=context)
+    rclpy.init(context=context, args=args)
     _CONTEXTS.add(context)
     return context
 

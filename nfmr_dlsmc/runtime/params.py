@@ -52,6 +52,7 @@ from nfmr_dlsmc.core.schema import (
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime import ros_yaml
 from nfmr_dlsmc.runtime.path_files import load_path_trajectory
 from nfmr_dlsmc.runtime.share import shipped_config
 import yaml
@@ -152,12 +153,13 @@ def _flatten(mapping: dict, prefix: str = '') -> dict:
 
 def read_yaml(path) -> object:
     """
-    Return the YAML document of a parameter file.
+    Return the YAML document of a parameter file, read as ROS 2 reads it (:mod:`.ros_yaml`).
 
     Raises
     ------
     ParamsFileError
-        The file cannot be read, or its YAML does not parse (with line and column).
+        The file cannot be read, or its YAML does not parse or has what ROS 2 refuses (an
+        alias, an empty value, a list of mixed types), with line and column.
 
     """
     path = Path(path)
@@ -166,7 +168,7 @@ def read_yaml(path) -> object:
     except OSError as exc:
         raise ParamsFileError(f'cannot read parameter file {path}: {exc.strerror}') from None
     try:
-        return yaml.safe_load(text)
+        return ros_yaml.load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, 'problem_mark', None)
         where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
