@@ -31,19 +31,35 @@ The names below are the Python API a script needs to run the paper's scenario::
     print(simulation_metrics(run).iae)
 """
 
-from nfmr_dlsmc.core.dlsmc import DlsmcController
-from nfmr_dlsmc.core.errors import NfmrError
-from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
-from nfmr_dlsmc.core.metrics import simulation_metrics
-from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
-from nfmr_dlsmc.core.trajectories import make_trajectory
-from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.plants.kinematic import SimResult, simulate
-from nfmr_dlsmc.runtime.params import controller_params, ControllerParams, load_params_file
+import importlib
 
-__all__ = [
-    'ControllerParams', 'DlsmcConfig', 'DlsmcController', 'InnerLoopGains', 'InputLimits',
-    'NfmrError', 'OuterLoopGains', 'ParameterError', 'RobotGeometry', 'SimResult', 'SteerMode',
-    'controller_params', 'load_params_file', 'make_trajectory', 'simulate',
-    'simulation_metrics', 'wheel_commands',
-]
+#: The public names and the module each comes from: imported when first used (PEP 562), so
+#: that a command is interruptible from its first instant instead of after a second of
+#: imports (numpy, scipy) in this package's import.
+_API = {
+    'DlsmcController': 'nfmr_dlsmc.core.dlsmc', 'NfmrError': 'nfmr_dlsmc.core.errors',
+    'DlsmcConfig': 'nfmr_dlsmc.core.gains', 'InnerLoopGains': 'nfmr_dlsmc.core.gains',
+    'InputLimits': 'nfmr_dlsmc.core.gains', 'OuterLoopGains': 'nfmr_dlsmc.core.gains',
+    'simulation_metrics': 'nfmr_dlsmc.core.metrics', 'RobotGeometry': 'nfmr_dlsmc.core.steering',
+    'SteerMode': 'nfmr_dlsmc.core.steering', 'wheel_commands': 'nfmr_dlsmc.core.steering',
+    'make_trajectory': 'nfmr_dlsmc.core.trajectories',
+    'ParameterError': 'nfmr_dlsmc.core.validation', 'SimResult': 'nfmr_dlsmc.plants.kinematic',
+    'simulate': 'nfmr_dlsmc.plants.kinematic', 'controller_params': 'nfmr_dlsmc.runtime.params',
+    'ControllerParams': 'nfmr_dlsmc.runtime.params',
+    'load_params_file': 'nfmr_dlsmc.runtime.params',
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    """Return a public name, importing its module on first use."""
+    if name not in _API:
+        raise AttributeError(f"module 'nfmr_dlsmc' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_API[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    """List the public names with the module's own."""
+    return sorted({*globals(), *_API})

@@ -91,3 +91,29 @@ def test_a_request_too_large_for_memory_is_refused_at_once(args, needle):
     proc = run(*args)
     assert proc.returncode == 2 and needle in proc.stderr and 'GiB of memory' in proc.stderr
     assert time.monotonic() - start < 10.0
+
+
+def takes_signal(pid: int, sig: int) -> bool:
+    """Return whether process ``pid`` has a handler of its own for ``sig`` (/proc SigCgt)."""
+    try:
+        status = Path(f'/proc/{pid}/status').read_text()
+    except OSError:
+        return False
+    caught = int(next(line for line in status.splitlines() if line.startswith('SigCgt:'))
+                 .split()[1], 16)
+    return bool(caught >> (sig - 1) & 1)
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_in_the_first_second_ends_a_command_in_one_line(tmp_path, sig):
+    # nfmr-run imports numpy, scipy, rclpy and pybullet for about a second before it
+    # starts anything: a signal sent as soon as the command takes it lands in there.
+    proc = subprocess.Popen([str(BIN / 'nfmr-run'), '--duration', '2', '--out',
+                             str(tmp_path / 'runs')], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    wait_for(lambda: takes_signal(proc.pid, signal.SIGHUP), timeout=60,
+             what='nfmr-run taking signals')
+    proc.send_signal(sig)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    assert 'interrupted' in stderr and 'Traceback' not in stderr, stderr

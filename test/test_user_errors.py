@@ -78,6 +78,18 @@ CASES = [
      '--duration must be a finite number > 0'),
     ('nfmr-run', lambda d: ['--duration', '1e-9', '--out', str(d / 'runs')],
      'must be at least one control period'),
+    # Outputs that cannot be written: refused before anything starts.
+    ('nfmr-run', lambda d: ['--out', str(_write(d / 'runs', ''))],
+     '--out {d}/runs: is a file, expected a folder'),
+    ('nfmr-run', lambda d: ['--out', '/proc/runs'], '--out /proc/runs: not writable'),
+    ('nfmr-bench', lambda d: ['--json', '/proc/bench.json'],
+     '--json /proc/bench.json: not writable'),
+    # A file the nodes would refuse is refused by the commands too, with its line.
+    ('nfmr-run',
+     lambda d: [str(_write(d / 'p.yaml', 'controller:\n  ros__parameters:\n'
+                                         '    outer: {C1: &c 0.6, C2: *c}\n')),
+                '--out', str(d / 'runs')],
+     'line 3, column 29: an alias (*c) is not allowed in a ROS 2 parameter file'),
 ]
 
 

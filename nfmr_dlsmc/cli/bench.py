@@ -10,6 +10,7 @@ throughput).
 import argparse
 import json
 import os
+from pathlib import Path
 import sys
 
 from nfmr_dlsmc.analysis.benchmarks import (
@@ -20,7 +21,7 @@ from nfmr_dlsmc.analysis.benchmarks import (
     pybullet_closed_loop_rtf,
     pybullet_world_rtf,
 )
-from nfmr_dlsmc.cli.common import json_ready, OneLineParser, run_command
+from nfmr_dlsmc.cli.common import check_writable, json_ready, OneLineParser, run_command
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -44,6 +45,8 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
+    if args.json:
+        check_writable(Path(args.json), '--json')
     print('kinematic closed loop (paper Case 1, 100 000 steps) ...', flush=True)
     figures = {'kinematic_scalar': kinematic_steps_per_second(args.repeat)}
     print('compute per tick of every controller ...', flush=True)

@@ -16,12 +16,11 @@ import signal
 import sys
 import tempfile
 
+from nfmr_dlsmc.cli.entry import interrupt, INTERRUPTED_STATUS
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
 
-#: Exit status of a command ended by Ctrl-C or SIGTERM (128 + SIGINT, as a shell reports).
-INTERRUPTED_STATUS = 130
 #: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
 #: measured; rounded up) [bytes].
 RECORDED_STEP_BYTES = 1024
@@ -60,10 +59,11 @@ def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
     -------
     int
         ``body``'s exit status; 2 after a user error (one line), 0 on a closed stdout
-        (``| head``), 130 on Ctrl-C or SIGTERM (one line).
+        (``| head``), 130 on Ctrl-C, SIGTERM or SIGHUP (one line).
 
     """
-    signal.signal(signal.SIGTERM, _interrupt)
+    for signum in (signal.SIGTERM, signal.SIGHUP):  # a closed terminal ends a run as kill does
+        signal.signal(signum, interrupt)
     try:
         return body(parser.parse_args(argv))
     except BrokenPipeError:
@@ -75,10 +75,6 @@ def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
         return INTERRUPTED_STATUS
     except NfmrError as exc:
         return report_user_error(parser.prog, exc)
-
-
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt
 
 
 def positive_number(text: str) -> float:
@@ -187,6 +183,8 @@ def check_writable(path: Path, option: str, directory: bool = False) -> None:
     path = Path(path)
     if not directory and path.is_dir():
         raise UsageError(f'{option} {path}: is a directory, expected a file')
+    if directory and path.exists() and not path.is_dir():
+        raise UsageError(f'{option} {path}: is a file, expected a folder')
     folder = path if directory else path.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)

@@ -121,7 +121,7 @@ class StopRequest:
         self.requested = False
         self._previous = {}
         if threading.current_thread() is threading.main_thread():
-            for signum in (signal.SIGINT, signal.SIGTERM):
+            for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
                 self._previous[signum] = signal.signal(signum, self._note)
 
     def _note(self, signum, frame) -> None:
