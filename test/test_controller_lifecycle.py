@@ -142,7 +142,7 @@ def test_the_states_follow_the_transitions_and_nothing_moves_before_activate(sys
 
 
 def test_after_activate_the_next_odometry_is_trajectory_time_0(system):
-    node, client = system(odom_timeout=5.0)
+    node, client = system(odom_timeout=5.0, restart_threshold=5.0)
     activate(node, client)
     assert client.state() == 'active'
     drive(client, 3, start_t=5.0)  # stamps long after anything the controller saw before
@@ -153,7 +153,7 @@ def test_after_activate_the_next_odometry_is_trajectory_time_0(system):
 
 
 def test_deactivate_commands_zero_speed_once_then_nothing(system, log):
-    node, client = system(odom_timeout=5.0)  # no stop for stale odometry meanwhile
+    node, client = system(odom_timeout=5.0, restart_threshold=5.0)  # no stop for stale odometry meanwhile
     activate(node, client)
     drive(client, 20)
     wait_for(lambda: len(client.twists) == len(client.wheels) == len(client.steer) == 20)
@@ -179,7 +179,7 @@ def test_deactivate_commands_zero_speed_once_then_nothing(system, log):
 
 
 def test_cleanup_drops_the_session_and_shutdown_stops_an_active_robot(system):
-    node, client = system(odom_timeout=5.0)
+    node, client = system(odom_timeout=5.0, restart_threshold=5.0)
     assert client.change('configure') and client.change('cleanup')
     assert client.state() == 'unconfigured' and node.session is None
     activate(node, client)

@@ -187,6 +187,8 @@ def test_an_integer_set_live_for_a_real_parameter_is_that_number(setup):
     ('limits.v_max', 0.1, 'must be > limits.v_min'),
     ('inner.eps', -0.01, 'must be > 0'),
     ('odom_timeout', 0.0, 'must be > 0'),
+    ('restart_threshold', 0.05, 'must be >= odom_timeout = 0.25 s'),
+    ('odom_timeout', 2.0, 'restart_threshold = 1.0 s: must be >= odom_timeout = 2 s'),
 ])
 def test_invalid_live_change_is_rejected_and_changes_nothing(setup, name, value, reason):
     node, peer = setup()

@@ -439,7 +439,8 @@ def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
         (time.monotonic(), m.linear.x, m.angular.z)), qos)
     spinner = Spinner(context, peer)
     controller = subprocess.Popen([str(Path(sys.executable).parent / 'controller'),
-                                   '--ros-args', '-p', 'odom_timeout:=30.0'],
+                                   '--ros-args', '-p', 'odom_timeout:=30.0', '-p',
+                                   'restart_threshold:=30.0'],
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         wait_matched(odom, commands, timeout=60)

@@ -115,7 +115,8 @@ def node_figures(seconds: float) -> dict:
         ctrl.wait(timeout=10)
         # The 1 kHz loop: clock mode, tracking the one odometry it gets, for `seconds`.
         ctrl = subprocess.Popen([str(BIN / 'controller'), '--ros-args', '-p',
-                                 'tick_source:=clock', '-p', 'odom_timeout:=1000000.0'],
+                                 'tick_source:=clock', '-p', 'odom_timeout:=1000000.0',
+                                 '-p', 'restart_threshold:=1000000.0'],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         procs.append(ctrl)
         while probe.count_subscribers('odom') == 0:

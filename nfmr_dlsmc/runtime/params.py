@@ -124,7 +124,8 @@ class NodeOptions:
                                  'messages stop the robot', POSITIVE)
     restart_threshold: float = param(1.0, 's', 'a stamp this far off the time base, three '
                                      'messages in a row, means the source restarted: '
-                                     'tracking starts over (doc/design.md, D10)', POSITIVE)
+                                     'tracking starts over (doc/design.md, D10); at least '
+                                     'odom_timeout', POSITIVE)
     autostart: bool = param(True, '', 'configure at start and activate once spinning; false: '
                             'stay unconfigured until the lifecycle transitions (nfmr-run drives '
                             'them)', FLAG, read_only=True)
@@ -137,6 +138,14 @@ class NodeOptions:
 
     def __post_init__(self):
         check_fields(self)
+        # Odometry comes more often than odom_timeout, or the robot stops for stale
+        # odometry: stamps that far apart are its normal spacing, not a restart. Below it,
+        # a slow source would have every message off the time base, and stop the robot.
+        if self.restart_threshold < self.odom_timeout:
+            raise ParameterError('restart_threshold', self.restart_threshold,
+                                 f'must be >= odom_timeout = {self.odom_timeout:g} s: '
+                                 'odometry that far apart is its normal spacing, not a '
+                                 'restart', 's')
 
 
 def _flatten(mapping: dict, prefix: str = '') -> dict:

@@ -89,7 +89,9 @@ class TrackingSession:
         time base, and they are taken as the new base only once ``confirm_messages``
         messages in a row continue from it (each within ``restart_threshold`` of the one
         before); until then each such message stops the robot for its tick and is not used,
-        so a single stamp far in the future or the past changes nothing.
+        so a single stamp far in the future or the past changes nothing. A new base in the
+        past starts tracking over; one in the future is a gap in the source's clock, and
+        trajectory time goes on from where it was, not from the clock's jump.
     confirm_messages : int
         How many messages in a row establish a new time base (>= 1).
     max_start_distance : float
@@ -239,6 +241,10 @@ class TrackingSession:
                     return True
                 restarting = gap < 0.0
                 control_time = self._new_base[0][1]
+                if not restarting and self._t0 is not None:
+                    # A gap in the source's clock is no time the robot lived through:
+                    # trajectory time goes on from the last tick that tracked.
+                    self._t0 = control_time - self._t
             self._new_base = []
         if restarting:
             self._restart()
