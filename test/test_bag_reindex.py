@@ -51,6 +51,20 @@ def test_a_cut_bag_is_rebuilt_from_its_complete_chunks(tmp_path):
     assert not read_bag(bag).truncated
 
 
+def test_the_kept_original_is_rebuilt_again_into_the_bags_own_file(tmp_path):
+    bag = cut_bag(tmp_path)
+    count = len(reindex(bag).original and read_bag(bag).messages)
+    original = bag / 'bag_0.mcap.before-reindex'
+    kept = original.read_bytes()
+    (bag / 'bag_0.mcap').write_bytes(b'')  # the rebuilt file lost: rebuild it again
+    result = reindex(original)
+    assert result.rebuilt and result.messages == count and result.original == original
+    assert sorted(p.name for p in bag.iterdir()) == [
+        'bag_0.mcap', 'bag_0.mcap.before-reindex', 'metadata.yaml']
+    assert original.read_bytes() == kept
+    assert len(read_bag(bag).messages) == count and not read_bag(bag).truncated
+
+
 def test_a_complete_bag_is_left_alone(tmp_path):
     with BagWriter(tmp_path / 'bag') as writer:
         writer.add_topic('/s', 'std_msgs/msg/Float64MultiArray', [QosProfile()])

@@ -40,12 +40,18 @@ def test_an_unwritable_output_is_refused_before_any_work(command, args):
 
 @pytest.mark.parametrize('command, shipped', [('nfmr-tune', 'config/tuned_outer.yaml'),
                                               ('nfmr-tune-baselines', 'config/comparison.yaml')])
-def test_a_shipped_file_is_replaced_only_with_force(command, shipped):
+def test_a_shipped_file_is_replaced_only_with_force(tmp_path, command, shipped):
     before = (ROOT / shipped).read_bytes()
-    proc = run(command, '--out', shipped)
-    assert proc.returncode == 2 and 'shipped with nfmr' in proc.stderr
-    assert '--force' in proc.stderr
-    assert (ROOT / shipped).read_bytes() == before
+    link = tmp_path / 'mine.yaml'  # a link of another name to the shipped file
+    link.symlink_to(ROOT / shipped)
+    try:
+        for out in (shipped, str(link)):
+            proc = run(command, '--out', out)
+            assert proc.returncode == 2 and 'shipped with nfmr' in proc.stderr, proc.stderr
+            assert '--force' in proc.stderr
+        assert (ROOT / shipped).read_bytes() == before
+    finally:  # a guard that failed must not leave the source tree changed
+        (ROOT / shipped).write_bytes(before)
 
 
 def busy_workers(pid: int, cpu_seconds: float = 0.5) -> int:

@@ -136,3 +136,17 @@ def test_a_closed_stdout_ends_quietly():
     proc.stdout.close()  # like `| head -0`
     _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 0 and b'Traceback' not in stderr, stderr
+
+
+@pytest.mark.parametrize('plant, x0', [('pybullet', (2.0, 3.0, 0.5)),
+                                       ('kinematic', (1.0, 4.0, 0.0))])
+def test_the_files_initial_pose_is_the_chassis_start_unless_x0_says_otherwise(
+        tmp_path, plant, x0):
+    from nfmr_dlsmc.analysis.evaluation import load_evaluation
+
+    path = tmp_path / 'p.yaml'
+    path.write_text('controller:\n  ros__parameters:\n    control_rate: 1000.0\n'
+                    'sim:\n  ros__parameters:\n    initial_pose: [2.0, 3.0, 0.5]\n')
+    assert load_evaluation(plant, 'dlsmc', None, 1.0, 'none', path).x0 == x0
+    given = (0.0, 1.0, 0.0)
+    assert load_evaluation(plant, 'dlsmc', given, 1.0, 'none', path).x0 == given

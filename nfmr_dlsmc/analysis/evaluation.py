@@ -103,7 +103,8 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     plant, controller_name, disturbance
         As in :class:`Evaluation`.
     x0 : tuple of 3 floats or None
-        Initial pose; None: a path's start pose, else :data:`CASE1_START`.
+        Initial pose; None: a path's start pose, else on pybullet the ``sim.initial_pose``
+        that ``params_file`` sets, else :data:`CASE1_START`.
     duration : float or None
         [s]; None: a path's duration and :data:`PATH_MARGIN`, else :data:`PAPER_DURATION`.
     params_file : str or Path, optional
@@ -145,8 +146,8 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
         controller = build_controller(controller_name, blocks.get(controller_name),
                                       params.dlsmc.limits, params.dlsmc.dt)
     controller = with_arrival(controller, trajectory, params.arrival)
-    if x0 is None:  # a path from its start, else Case 1's start
-        x0 = getattr(trajectory, 'start_pose', CASE1_START)
+    if x0 is None:  # a path from its start, else the chassis's initial_pose, else Case 1's
+        x0 = getattr(trajectory, 'start_pose', None) or _file_start(params_file, plant)
     if duration is None:  # a path until its end and a little more, else the paper's 100 s
         duration = getattr(trajectory, 'duration', PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
     if sensing is not None and plant != 'pybullet':
@@ -156,6 +157,16 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
              else None)
     return Evaluation(plant, controller_name, controller, params, trajectory, world,
                       tuple(x0), duration, disturbance)
+
+
+def _file_start(params_file, plant: str) -> tuple:
+    """Return the ``sim.initial_pose`` a parameter file sets (pybullet), else Case 1's start."""
+    if plant != 'pybullet' or not params_file:
+        return CASE1_START
+    flat = load_params_file(params_file, 'sim')
+    if 'initial_pose' not in flat:
+        return CASE1_START
+    return tuple(float(v) for v in robot_plant('pybullet').settings(flat).initial_pose)
 
 
 def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,

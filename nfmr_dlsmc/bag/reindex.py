@@ -16,6 +16,9 @@ from nfmr_dlsmc.bag.reader import BagContents, BagError, iter_bag, mcap_file
 from nfmr_dlsmc.bag.writer import BagWriter
 import yaml
 
+#: What the original of a rebuilt bag file is kept as, beside it.
+ORIGINAL_SUFFIX = '.before-reindex'
+
 
 @dataclass(frozen=True)
 class ReindexResult:
@@ -72,7 +75,11 @@ def reindex(path) -> ReindexResult:
         pass
     if not contents.truncated and (bag / 'metadata.yaml').is_file():
         return ReindexResult(bag, False, 0, len(contents.topics), 0, None)
-    stem = file.name[:-len('_0.mcap')] if file.name.endswith('_0.mcap') else file.stem
+    # The kept original of an earlier reindex is rebuilt again into the bag's own file,
+    # and stays as it is: no second .mcap beside it, no .before-reindex.before-reindex.
+    again = file.name.endswith(ORIGINAL_SUFFIX)
+    name = file.name[:-len(ORIGINAL_SUFFIX)] if again else file.name
+    stem = name[:-len('_0.mcap')] if name.endswith('_0.mcap') else Path(name).stem
     staging = bag.parent / f'.{bag.name}.reindexing'
     if staging.exists():
         shutil.rmtree(staging)
@@ -88,8 +95,9 @@ def reindex(path) -> ReindexResult:
                 messages += 1
         if not messages:
             raise BagError(f'{file}: no complete chunk to recover')
-        original = file.with_name(file.name + '.before-reindex')
-        file.replace(original)
+        original = file if again else file.with_name(file.name + ORIGINAL_SUFFIX)
+        if not again:
+            file.replace(original)
         writer.path.replace(bag / f'{stem}_0.mcap')
         (staging / 'metadata.yaml').replace(bag / 'metadata.yaml')
     except OSError as exc:

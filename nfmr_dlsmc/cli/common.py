@@ -228,8 +228,10 @@ def check_output_file(path: Path, force: bool) -> None:
         ``path`` is a shipped file and ``force`` is false, or it cannot be written.
 
     """
-    shipped = shipped_config(Path(path).name)
-    if not force and Path(path).resolve() == shipped.resolve() and shipped.exists():
+    # By where the file really is: a link of any name to a shipped file is that file.
+    target = Path(path).resolve()
+    shipped = shipped_config(target.name)
+    if not force and target == shipped.resolve() and shipped.exists():
         raise UsageError(f'--out {path} is a file shipped with nfmr; write elsewhere or '
                          'add --force to replace it')
     check_writable(path, '--out')

@@ -52,7 +52,8 @@ def _parser() -> argparse.ArgumentParser:
                                 'its end (e.g. config/paths/warehouse_loop.csv)')
     parser.add_argument('--x0', type=number_triple('x,y,theta [m,m,rad]'), default=None,
                         help="initial pose x,y,theta [m,m,rad] (default: a path's start, "
-                             'else 1,4,0)')
+                             "else on pybullet the --params file's sim.initial_pose, else "
+                             '1,4,0)')
     parser.add_argument('--duration', type=positive_number, default=None,
                         help="[s] (default: a path's duration and 5 s to arrive, else 100)")
     parser.add_argument('--dt', type=positive_number, default=None,
