@@ -153,7 +153,8 @@ def test_after_activate_the_next_odometry_is_trajectory_time_0(system):
 
 
 def test_deactivate_commands_zero_speed_once_then_nothing(system, log):
-    node, client = system(odom_timeout=5.0, restart_threshold=5.0)  # no stop for stale odometry meanwhile
+    # No stop for stale odometry meanwhile.
+    node, client = system(odom_timeout=5.0, restart_threshold=5.0)
     activate(node, client)
     drive(client, 20)
     wait_for(lambda: len(client.twists) == len(client.wheels) == len(client.steer) == 20)
