@@ -299,3 +299,31 @@ def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
     assert written['dlsmc_robot'] == shipped['dlsmc_robot']
     assert written['pid'] == tuned_pid and written['dlsmc'] == {}
     assert 'csmc' not in written  # tuned blocks come only from this search
+
+
+def test_along_a_path_every_law_follows_it_and_arrives_by_the_same_rule(tmp_path):
+    out = tmp_path / 'report'
+    path = shipped_config('paths/warehouse_loop.csv')
+    assert compare_cli.main(['--path', str(path), '--controllers', 'dlsmc_robot', 'kanayama',
+                             'stanley', '--out', str(out), '--jobs', '1']) == 0
+    document = json.loads((out / 'results.json').read_text())
+    ((start, runs),) = document['path'].items()
+    assert start == '0,0,0' and set(runs) == {'dlsmc', 'dlsmc_robot', 'kanayama', 'stanley'}
+    reference = controller_params({**load_params_file(shipped_config('robot_case1.yaml')),
+                                   'trajectory.name': 'path',
+                                   'trajectory.path.file': str(path)}).trajectory
+    for name in ('dlsmc_robot', 'kanayama', 'stanley'):
+        figures = runs[name]
+        assert figures['hold_from'] == 5.0 and figures['hold_distance_p99'] < 1e-3, name
+        assert figures['arrival'] == 'arrived', name
+        # Stopped by the rule (within goal_tolerance 5 mm) at the reference's end.
+        assert figures['arrival_position_error'] <= 5e-3, name
+        assert abs(figures['arrival_time'] - reference.duration) < 2.0, name
+    report = (out / 'report.md').read_text()
+    assert 'warehouse_loop.csv' in report and '| DLSMC, robot profile |' in report
+    assert (out / 'path_runs.png').stat().st_size > 10_000
+
+
+def test_params_without_a_path_is_refused(tmp_path):
+    assert compare_cli.main(['--params', str(shipped_config('robot_case1.yaml')), '--out',
+                             str(tmp_path / 'r')]) == 2

@@ -61,10 +61,11 @@ class ConsoleLog:
     def __init__(self, capfd):
         self.capfd = capfd
         self.lines = []
+        self._partial = ''  # a line the node's thread was still writing when last read
 
     def read(self) -> list:
-        self.lines += [line for line in self.capfd.readouterr().err.splitlines()
-                       if '[controller]' in line]
+        *complete, self._partial = (self._partial + self.capfd.readouterr().err).split('\n')
+        self.lines += [line for line in complete if '[controller]' in line]
         return self.lines
 
 
@@ -351,7 +352,8 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
                 (path_message([(6.0, 4.0), (8.0, 4.0)]), 'more than max_start_distance = 1 m')]
     for k, (message, says) in enumerate(refusals):
         publisher.publish(message)
-        wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1, what='a refusal')
+        wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1, timeout=30.0,
+                 what='a refusal')
         assert says in log.lines[-1] and 'the previous reference stays' in log.lines[-1]
     drive(peer, 5, start_t=0.005)
     assert dict(zip(labels, peer.states[-1][1].data))['t'] == pytest.approx(0.009)

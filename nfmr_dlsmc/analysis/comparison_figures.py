@@ -14,6 +14,7 @@ from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGIT
 from nfmr_dlsmc.baselines.registry import controller_label
 from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
+import numpy as np
 
 #: One colour per controller, the same in every figure.
 COLORS = {
@@ -247,3 +248,34 @@ def write_figures(out: Path, series: dict, names, plant: str = 'kinematic') -> d
         return figures
     return {key: (name, caption.replace(':', f' ({plant} chassis):', 1))
             for key, (name, caption) in figures.items()}
+
+
+def write_path_figure(out: Path, series: dict, names, plant: str, path_name: str) -> dict:
+    """
+    Write the figure of a path run of every controller; return id -> (file name, caption).
+
+    (a) each robot's path over the reference's, (b) its distance to the reference in time,
+    on a log scale so that millimetres and metres both show.
+    """
+    matplotlib.use('Agg')
+    runs = {key[2]: s for key, s in series.items() if key[0] == 'path' and key[2] in names}
+    reference = next(iter(runs.values()))
+    margin = 1.0
+    xlim = (float(reference['x_d'].min()) - margin, float(reference['x_d'].max()) + margin)
+    ylim = (float(reference['y_d'].min()) - margin, float(reference['y_d'].max()) + margin)
+    fig, axes = plt.subplots(2, 1, figsize=(9, 10), gridspec_kw={'height_ratios': [3, 2]})
+    _paths(axes[0], runs, f'(a) {path_name}: paths', xlim, ylim)
+    axes[0].legend(fontsize=7, ncol=3)
+    span = float(reference['t'][-1])
+    for name, s in runs.items():
+        axes[1].semilogy(s['t'], np.maximum(s['distance'], 1e-6), color=COLORS.get(name),
+                         lw=1.0, label=controller_label(name))
+    axes[1].set_xlim(0.0, span)
+    axes[1].set_xlabel('t [s]')
+    axes[1].set_ylabel('distance to the reference [m]')
+    axes[1].set_title('(b) distance error (ground truth)')
+    axes[1].grid(alpha=0.3, which='both')
+    where = '' if plant == 'kinematic' else f' on the {plant} chassis'
+    return {'path': (_save(fig, out / 'path_runs.png').name,
+                     f'Every controller along {path_name}{where}, from its start at rest to '
+                     'its end: (a) paths, (b) distance to the reference.')}

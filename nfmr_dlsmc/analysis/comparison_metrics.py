@@ -10,6 +10,7 @@ from nfmr_dlsmc.core.metrics import (
     CONVERGENCE_TOLERANCE,
     error_criteria,
     finite_or_none,
+    HOLD_FROM,
     simulation_metrics,
     total_variation_rate,
 )
@@ -30,6 +31,9 @@ PULSE_RECOVERY = 1.5
 HOLD_KEYS = ('t_conv_1cm', 'hold_from', 'hold_distance_p99', 'hold_distance_max',
              'hold_theta_e_p99', 'hold_theta_e_max', 'hold_omega_tv', 'hold_omega_saturated',
              'hold_steer_rate_max', 'hold_steer_joint_rate_max')
+#: Along a path, how each run ended: its outcome, when it stopped [s], and how far from the
+#: goal it stood then [m, rad].
+ARRIVAL_KEYS = ('arrival', 'arrival_time', 'arrival_position_error', 'arrival_yaw_error')
 
 #: Table 2 (Case 1, x0 = (1, 4, 0)) and the convergence times of section 4.2: position
 #: (distance <= 1 mm), theta_r (Fig. 9b) and s_y (Fig. 12).
@@ -78,7 +82,8 @@ def _attitude_band(t: np.ndarray, theta_e: np.ndarray, pulse_starts=()) -> float
     return float(values.max())
 
 
-def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
+def run_metrics(result, omega_max: float, pulse_starts=(), hold_from: float = HOLD_FROM,
+                goal=None) -> dict:
     """
     Return every number the report prints for one run, JSON-ready (None where undefined).
 
@@ -95,7 +100,8 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     saturation; ``omega_raw_tv`` (total variation per second of omega_raw over the second
     half of the run) [rad/s^2]; and the :data:`HOLD_KEYS` of
     :func:`~nfmr_dlsmc.core.metrics.simulation_metrics` (``t_conv_1cm`` and the figures of
-    holding the path from 15 s on, steer figures where the result has steer angles).
+    holding the path from ``hold_from`` [s] on, steer figures where the result has steer
+    angles); with the ``goal`` pose of a path, also its :data:`ARRIVAL_KEYS`.
     """
     t, dt = result.t, result.dt
     telemetry = result.telemetry
@@ -135,8 +141,10 @@ def run_metrics(result, omega_max: float, pulse_starts=()) -> dict:
     else:
         metrics.update(theta_e_settled_iae=None, theta_e_settled_ise=None,
                        theta_e_settled_std=None)
-    tracking = simulation_metrics(result).as_dict()
+    tracking = simulation_metrics(result, hold_from, goal).as_dict()
     metrics.update({key: tracking[key] for key in HOLD_KEYS})
+    if goal is not None:
+        metrics.update({key: tracking[key] for key in ARRIVAL_KEYS})
     for key in ('iae', 'ise', 'std', 'theta_r_iae', 'theta_r_ise', 'theta_r_std',
                 'theta_r_settled_iae', 'theta_r_settled_ise', 'theta_r_settled_std'):
         metrics[key] = finite_or_none(metrics[key])

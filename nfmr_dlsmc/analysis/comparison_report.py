@@ -548,6 +548,61 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
     path.write_text('\n'.join(lines))
 
 
+#: The arrival columns of a path run: (results key, column header, cell format).
+ARRIVAL_COLUMNS = (
+    ('arrival', 'ended', lambda value: value or 'still moving'),
+    ('arrival_time', 'stopped at [s]', _time),
+    ('arrival_position_error', 'distance to the goal [m]', format_metric),
+    ('arrival_yaw_error', 'abs(heading error) at the goal [rad]', format_metric),
+)
+
+
+def write_path_report(path: Path, document: dict, figures: dict, gains_path: Path,
+                      seconds: float, jobs: int, path_file: Path, duration: float,
+                      reference_duration: float) -> None:
+    """
+    Write ``report.md`` of every controller along one path (``nfmr-compare --path``).
+
+    ``document["path"]`` holds start -> controller -> metrics; the hold window starts at
+    ``hold_from`` of the runs, the arrival rule is the same for every law.
+    """
+    plant = document.get('plant', 'kinematic')
+    ((start, runs),) = document['path'].items()
+    hold_from = next(iter(runs.values()))['hold_from']
+    chassis = ('the kinematic model (3), forward Euler at 1 ms' if plant == 'kinematic' else
+               'the simulated 4WIS chassis (pybullet, in-process, lockstep at 1 ms); every '
+               'figure is of its ground truth')
+    lines = [
+        f'# nfmr comparison along a path — {path_file.name}'
+        + ('' if plant == 'kinematic' else f', {plant} chassis')
+        + ('' if document.get('sensing', 'ideal') == 'ideal' else
+           f", {document['sensing']} odometry"),
+        '',
+        f'Every controller follows `{path_file}` from its start at rest, x0 = ({start}), '
+        f'timed by the speed profile of the parameter file ({reference_duration:.1f} s), '
+        f'for {duration:g} s on {chassis}. Every law stops by the same arrival rule '
+        '(`arrival.*`): zero speed once within the goal tolerances, or when it passed the '
+        'goal or ran out of `goal_timeout`. Inputs saturated at v in [0.2, 2] m/s (below '
+        'v_min only on the final approach), abs(omega) <= 1.59 rad/s. Gains: '
+        f'`{gains_path}`. {len(runs)} runs on {jobs} processes in {seconds:.1f} s '
+        '(`nfmr-compare --path`).',
+        '',
+        *_sensing_note(document.get('sensing', 'ideal')),
+        f'## Holding the path (t >= {hold_from:g} s) and arriving',
+        '',
+    ]
+    columns = HOLD_COLUMNS + ARRIVAL_COLUMNS
+    lines += _table_head('controller', [header for _, header, _ in columns])
+    for name in CONTROLLER_NAMES:
+        if name in runs:
+            cells = [cell(runs[name].get(key)) for key, _, cell in columns]
+            lines.append(f'| {controller_label(name)} | ' + ' | '.join(cells) + ' |')
+    lines += ['', '## Figures', '']
+    for name, caption in figures.values():
+        lines += [f'![{caption}]({name})', '', f'*{caption}*', '']
+    path.write_text('\n'.join(lines))
+
+
 def _steer_rate_limit() -> float:
     """Return the steer joints' rate limit [rad/s] of the default pybullet chassis."""
     return robot_plant('pybullet').settings({}).world.motors.steer_rate_limit

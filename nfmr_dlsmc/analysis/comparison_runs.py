@@ -8,9 +8,16 @@ from concurrent.futures import as_completed
 from dataclasses import replace
 
 from nfmr_dlsmc.analysis.comparison_metrics import run_metrics
-from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario, SCENARIOS
+from nfmr_dlsmc.analysis.comparison_scenarios import (
+    CASE1_LONGITUDINAL,
+    run_scenario,
+    Scenario,
+    SCENARIOS,
+)
 from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.disturbances import YawRateDisturbance
 from nfmr_dlsmc.core.gains import InputLimits
+from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.runtime.params import load_gain_blocks
 from nfmr_dlsmc.runtime.worker_pool import worker_pool
 import numpy as np
@@ -63,6 +70,21 @@ def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
     return tasks
 
 
+def path_tasks(names, blocks: dict, trajectory, arrival, duration: float,
+               plant: str = 'kinematic', sensing: str | None = None) -> list[tuple]:
+    """
+    Return a run of every controller of ``names`` along a path, as :func:`comparison_tasks`.
+
+    Each starts at rest at the path's start (``trajectory.start_pose``), runs ``duration``
+    [s] and stops by the ``arrival`` rule (:class:`~nfmr_dlsmc.core.arrival.ArrivalConfig`),
+    the same for every law; the key is ``("path", start, controller)``.
+    """
+    scenario = Scenario('path', tuple(round(float(v), 9) + 0.0 for v in trajectory.start_pose),
+                        YawRateDisturbance(), duration, trajectory=trajectory, arrival=arrival)
+    return [(('path', scenario.start_key, name), name, blocks.get(name), scenario, plant,
+             sensing) for name in names]
+
+
 def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
     """
     Run ``tasks`` on ``jobs`` processes (their stdout silenced).
@@ -86,7 +108,9 @@ def _run_task(task: tuple) -> tuple:
     key, name, block, scenario, plant, sensing = task
     result = run_scenario(name, block, scenario, plant, sensing)
     pulses = [p.start for p in scenario.disturbance.pulses]
-    metrics = run_metrics(result, InputLimits().omega_max, pulses)
+    goal = getattr(scenario.trajectory, 'end_pose', None)  # a path's last pose
+    metrics = run_metrics(result, InputLimits().omega_max, pulses,
+                          HOLD_FROM if goal is None else PATH_HOLD_FROM, goal)
     return key, metrics, _plot_series(result)
 
 

@@ -2,13 +2,15 @@
 The paper's comparison scenarios (section 4.2).
 
 The sine reference, 100 s at 1 ms, Case 1 from two starts without disturbance, Case 2
-with the yaw-rate pulses; on the kinematic model (3) or the pybullet chassis.
+with the yaw-rate pulses; on the kinematic model (3) or the pybullet chassis. Also a path
+of the user's, from its start to its end, with the same arrival rule for every law.
 """
 
 from dataclasses import dataclass
 import math
 
 from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.core.arrival import ArrivalConfig, with_arrival
 from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.sensing import with_sensing
@@ -33,7 +35,7 @@ class Scenario:
     Attributes
     ----------
     case : str
-        ``"case1"`` or ``"case2"``.
+        ``"case1"``, ``"case2"`` or ``"path"``.
     x0 : tuple of 3 floats
         Initial pose (x [m], y [m], theta [rad]).
     disturbance : YawRateDisturbance
@@ -41,6 +43,11 @@ class Scenario:
         [s]
     dt : float
         Control and integration period [s].
+    trajectory : object or None
+        The reference; None: the paper's sine.
+    arrival : ArrivalConfig or None
+        With a reference that ends (a path), when a controller has arrived and stops
+        (:func:`~nfmr_dlsmc.core.arrival.with_arrival`), the same rule for every law.
 
     """
 
@@ -49,6 +56,8 @@ class Scenario:
     disturbance: YawRateDisturbance
     duration: float = 100.0
     dt: float = 0.001
+    trajectory: object = None
+    arrival: ArrivalConfig | None = None
 
     @property
     def start_key(self) -> str:
@@ -74,7 +83,8 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     """
     Run controller ``name`` with gain block ``block`` on ``scenario`` and ``plant``.
 
-    The paper's sine and limits; ``plant`` is one of :data:`PLANTS`. On the kinematic model
+    The scenario's reference (the paper's sine unless it gives one) and the paper's limits;
+    along a path every law stops by the scenario's arrival rule; ``plant`` is one of :data:`PLANTS`. On the kinematic model
     the result's ``steer`` holds the steer angles [rad] the double Ackermann mapping would
     command for (v, omega + disturbance); on pybullet the disturbance is added to omega
     before the wheel mapping and the chassis is that of the default world of the registered
@@ -87,8 +97,9 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     if sensing is not None and plant != 'pybullet':
         raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
                              'kinematic model has no odometry')
-    controller = build_controller(name, block, dt=scenario.dt)
-    trajectory = make_trajectory('sine')
+    trajectory = scenario.trajectory or make_trajectory('sine')
+    controller = with_arrival(build_controller(name, block, dt=scenario.dt), trajectory,
+                              scenario.arrival)
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
         world = plant_.settings({} if sensing is None else with_sensing({}, sensing)).world

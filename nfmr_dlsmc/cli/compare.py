@@ -4,7 +4,9 @@
 The folder holds ``report.md`` (Tables 2-4 beside the paper's values, the figures of
 holding the path), the figures of section 4.2 as PNG files and ``results.json``; the runs
 are on the kinematic model (3) or the pybullet chassis
-(:mod:`nfmr_dlsmc.analysis.comparison_runs`).
+(:mod:`nfmr_dlsmc.analysis.comparison_runs`). With ``--path FILE`` every controller
+follows that path instead, from its start to its end, and the report holds how each held
+it and arrived.
 """
 
 import argparse
@@ -18,6 +20,7 @@ from nfmr_dlsmc.analysis.comparison_runs import (
     checked_gain_blocks,
     comparison_tasks,
     DECIMATION,
+    path_tasks,
     results_document,
     run_all,
 )
@@ -33,7 +36,9 @@ from nfmr_dlsmc.cli.common import (
     run_command,
     UsageError,
 )
+from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file, PATH, path_file
 from nfmr_dlsmc.runtime.share import shipped_config
 
 
@@ -53,9 +58,18 @@ def _parser() -> argparse.ArgumentParser:
                         help="pybullet: the robot's odometry (rate, latency, noise, bias) "
                              'from a preset, every law seeing the pose through the robot '
                              "profile's estimator (default: ideal, the ground truth)")
-    parser.add_argument('--duration', type=positive_number, default=CASE1_LONGITUDINAL.duration,
-                        help="length of every run [s] (default 100, the paper's; shorter "
-                             'for a quick look: the hold figures start at 15 s)')
+    parser.add_argument('--duration', type=positive_number, default=None,
+                        help="length of every run [s] (default 100, the paper's; with "
+                             "--path the path's duration and 5 s; shorter for a quick look: "
+                             'the hold figures start at 15 s, along a path at 5 s)')
+    parser.add_argument('--path', type=Path, default=None, metavar='FILE',
+                        help='every controller follows this path file (CSV x,y or t,x,y; '
+                             'YAML list) from its start to its end instead of the '
+                             "paper's scenarios, e.g. config/paths/warehouse_loop.csv")
+    parser.add_argument('--params', type=Path, default=None, metavar='FILE.yaml',
+                        help='with --path: the parameter file whose trajectory.path.* times '
+                             'the path and whose arrival.* stops every law (default '
+                             'config/robot_case1.yaml)')
     parser.add_argument('--gains', type=Path, default=None,
                         help='comparison gains file (default config/comparison.yaml)')
     parser.add_argument('--controllers', nargs='+', choices=CONTROLLER_NAMES,
@@ -71,8 +85,8 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    from nfmr_dlsmc.analysis.comparison_figures import write_figures
-    from nfmr_dlsmc.analysis.comparison_report import write_report
+    from nfmr_dlsmc.analysis.comparison_figures import write_figures, write_path_figure
+    from nfmr_dlsmc.analysis.comparison_report import write_path_report, write_report
 
     gains_path = args.gains or shipped_config('comparison.yaml')
     names = list(dict.fromkeys(['dlsmc', *args.controllers]))
@@ -81,7 +95,22 @@ def _run(args) -> int:
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')
-    tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
+    if args.params is not None and args.path is None:
+        raise UsageError('--params times a path: give --path too')
+    reference = None
+    if args.path is not None:
+        flat = load_params_file(args.params or shipped_config('robot_case1.yaml'))
+        flat |= {'trajectory.name': PATH, 'trajectory.path.file': str(path_file(str(args.path)))}
+        params = controller_params(flat)
+        reference = params.trajectory
+        if args.duration is None:
+            args.duration = round(reference.duration + PATH_MARGIN, 1)
+        tasks = path_tasks(names, blocks, reference, params.arrival, args.duration,
+                           args.plant, args.sensing)
+    else:
+        if args.duration is None:
+            args.duration = CASE1_LONGITUDINAL.duration
+        tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
     # Its figures show a point every DECIMATION steps: at least one.
     check_run_length(args.duration, tasks[0][3].dt, min(args.jobs, len(tasks)), DECIMATION)
     begin = time.perf_counter()
@@ -98,9 +127,16 @@ def _run(args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     document = results_document(metrics, args.plant, args.sensing)
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
-    figures = write_figures(args.out, series, names, args.plant)
-    write_report(args.out / 'report.md', document, figures, gains_path,
-                 time.perf_counter() - begin, len(tasks), args.jobs, duration=args.duration)
+    if reference is None:
+        figures = write_figures(args.out, series, names, args.plant)
+        write_report(args.out / 'report.md', document, figures, gains_path,
+                     time.perf_counter() - begin, len(tasks), args.jobs,
+                     duration=args.duration)
+    else:
+        figures = write_path_figure(args.out, series, names, args.plant, args.path.name)
+        write_path_report(args.out / 'report.md', document, figures, gains_path,
+                          time.perf_counter() - begin, args.jobs, args.path, args.duration,
+                          reference.duration)
     print(f"wrote {args.out / 'report.md'}, {len(figures)} figures and results.json "
           f'in {time.perf_counter() - begin:.1f} s', file=sys.stderr)
     print(args.out)

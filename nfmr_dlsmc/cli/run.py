@@ -10,13 +10,9 @@ from pathlib import Path
 import sys
 
 from nfmr_dlsmc.cli.common import check_writable, OneLineParser, run_command, UsageError
-from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.ros.launcher import run, RunOptions
-
-#: Default start of the hold window of a path [s]: a path starts from rest, and a robot
-#: that keeps up with it holds it a few seconds in.
-PATH_HOLD_FROM = 5.0
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -15,7 +15,7 @@ from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
 import numpy as np
 
 __all__ = ['ARRIVAL_ROWS', 'COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria',
-           'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'TrackingMetrics', 'convergence_time',
+           'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'PATH_HOLD_FROM', 'TrackingMetrics', 'convergence_time',
            'error_criteria', 'finite_or_none', 'format_metric', 'hold_metrics', 'metric_rows',
            'sample_durations', 'simulation_metrics', 'total_variation_rate',
            'tracking_metrics']
@@ -26,6 +26,9 @@ CONVERGENCE_TOLERANCE = 1e-3
 COARSE_TOLERANCE = 1e-2
 #: Default start of the hold window [s]: the hold figures cover t >= this.
 HOLD_FROM = 15.0
+#: Default start of the hold window of a path [s]: a path starts from rest, and a robot
+#: that keeps up with it holds it a few seconds in.
+PATH_HOLD_FROM = 5.0
 #: The label of each figure of :class:`TrackingMetrics` in a metrics table.
 METRIC_LABELS = {
     'iae': 'IAE of distance [m*s]',
