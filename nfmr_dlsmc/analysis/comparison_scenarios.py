@@ -84,9 +84,10 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     Run controller ``name`` with gain block ``block`` on ``scenario`` and ``plant``.
 
     The scenario's reference (the paper's sine unless it gives one) and the paper's limits;
-    along a path every law stops by the scenario's arrival rule; ``plant`` is one of :data:`PLANTS`. On the kinematic model
-    the result's ``steer`` holds the steer angles [rad] the double Ackermann mapping would
-    command for (v, omega + disturbance); on pybullet the disturbance is added to omega
+    along a path every law stops by the scenario's arrival rule. ``plant`` is one of
+    :data:`PLANTS`. On the kinematic model the result's ``steer`` holds the steer angles
+    [rad] the double Ackermann mapping would command for (v, omega + disturbance); on
+    pybullet the disturbance is added to omega
     before the wheel mapping and the chassis is that of the default world of the registered
     ``pybullet`` plant (Table 1, physics at 1 ms). With a ``sensing`` preset (pybullet
     only) the world's odometry is the preset's and every law sees the pose through the

@@ -25,6 +25,7 @@ from nfmr_dlsmc.analysis.comparison_runs import (
     run_all,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS
+from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
     check_run_length,
@@ -36,7 +37,6 @@ from nfmr_dlsmc.cli.common import (
     run_command,
     UsageError,
 )
-from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, PATH, path_file
 from nfmr_dlsmc.runtime.share import shipped_config

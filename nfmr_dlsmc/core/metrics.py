@@ -15,8 +15,9 @@ from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
 import numpy as np
 
 __all__ = ['ARRIVAL_ROWS', 'COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria',
-           'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'PATH_HOLD_FROM', 'TrackingMetrics', 'convergence_time',
-           'error_criteria', 'finite_or_none', 'format_metric', 'hold_metrics', 'metric_rows',
+           'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'PATH_HOLD_FROM', 'TrackingMetrics',
+           'convergence_time', 'error_criteria', 'finite_or_none', 'format_metric',
+           'hold_metrics', 'metric_rows',
            'sample_durations', 'simulation_metrics', 'total_variation_rate',
            'tracking_metrics']
 
