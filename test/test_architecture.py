@@ -144,3 +144,20 @@ def test_the_layer_test_catches_an_upward_import(tmp_path):
     assert found == [(1, 'rclpy'), (2, 'nfmr_dlsmc.cli.eval')]
     assert rank(layer_of('nfmr_dlsmc.cli.eval')) > rank(layer_of('nfmr_dlsmc.core.dlsmc'))
     assert 'rclpy' not in THIRD_PARTY['core']
+
+
+#: The rosdep key of each third-party import that is not a ROS package of the same name.
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'python3-yaml',
+               'matplotlib': 'python3-matplotlib', 'PIL': 'python3-pil',
+               'pybullet': 'python3-pybullet-pip', 'pybullet_utils': 'python3-pybullet-pip',
+               'mcap': 'python3-mcap-pip', 'zstandard': 'python3-zstandard'}
+
+
+def test_package_xml_lists_every_dependency_the_code_may_import():
+    import xml.etree.ElementTree as ElementTree
+
+    manifest = ElementTree.parse(ROOT / 'package.xml').getroot()
+    listed = {e.text for e in manifest if e.tag in ('depend', 'exec_depend')}
+    needed = {ROSDEP_KEYS.get(name, name) for names in THIRD_PARTY.values() for name in names}
+    assert needed - listed == set()
+    assert listed - needed == set()  # and nothing the code does not import

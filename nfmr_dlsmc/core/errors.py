@@ -3,13 +3,21 @@ The root of the errors nfmr reports to its user.
 
 Every command and both nodes catch :class:`NfmrError` in one place
 (:func:`nfmr_dlsmc.cli.common.run_command`, :func:`nfmr_dlsmc.ros.node_main.run_node`) and
-print its message as one line, exit status 2: a parameter, a parameter file, a bag or a run
-the user asked for is wrong, and the message says which and how. Anything else is a bug and
-keeps its traceback.
+print its message as one line, ``<prog>: error: <message>``: a parameter, a parameter file,
+a path, a bag or a command line the user gave is wrong, and the message says which and how.
+That is exit status 2, but for a run that started and could not complete
+(:class:`~nfmr_dlsmc.ros.launcher.RunError`: a child died, the run stalled, another source
+reached it), which ``nfmr-run`` reports as exit status 1 after finishing its bag. Anything
+else is a bug and keeps its traceback.
 
-Below it: :class:`~nfmr_dlsmc.core.validation.ParameterError`,
+Below it: :class:`~nfmr_dlsmc.core.validation.ParameterError` (and its
+:class:`~nfmr_dlsmc.core.path_reference.PathError`),
 :class:`~nfmr_dlsmc.runtime.params.ParamsFileError`,
-:class:`~nfmr_dlsmc.bag.reader.BagError` and :class:`~nfmr_dlsmc.ros.launcher.RunError`.
+:class:`~nfmr_dlsmc.runtime.path_files.PathFileError`,
+:class:`~nfmr_dlsmc.bag.reader.BagError`, :class:`~nfmr_dlsmc.cli.common.UsageError`,
+:class:`~nfmr_dlsmc.ros.node_main.RosArgumentsError`,
+:class:`~nfmr_dlsmc.analysis.animation.AnimationError` and
+:class:`~nfmr_dlsmc.ros.launcher.RunError`.
 """
 
 __all__ = ['NfmrError']
