@@ -123,3 +123,18 @@ def test_a_signal_in_the_first_second_ends_a_command_in_one_line(tmp_path, sig):
     _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
     assert 'interrupted' in stderr and 'Traceback' not in stderr, stderr
+
+
+def test_workers_die_with_a_command_killed_outright(tmp_path):
+    # SIGKILL (or a timeout's kill) runs no cleanup in the command: its workers must end
+    # by themselves instead of computing on for minutes.
+    proc = subprocess.Popen([str(BIN / 'nfmr-montecarlo'), '--plant', 'pybullet', '--n', '8',
+                             '--duration', '60', '--jobs', '2'], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, cwd=tmp_path)
+    wait_for(lambda: busy_workers(proc.pid) >= 2, timeout=120, what='workers running pybullet')
+    workers = subprocess.run(['pgrep', '-P', str(proc.pid)], capture_output=True,
+                             text=True).stdout.split()
+    proc.kill()
+    proc.wait(timeout=30)
+    wait_for(lambda: not any(Path(f'/proc/{pid}').exists() for pid in workers), timeout=30,
+             what='the workers gone')

@@ -11,7 +11,6 @@ plots. The last line printed is the bag directory. The command line is
 :mod:`nfmr_dlsmc.cli.run`.
 """
 
-import ctypes
 from dataclasses import dataclass, replace
 import math
 import os
@@ -59,6 +58,7 @@ from nfmr_dlsmc.runtime.params import (
     PATH,
     path_file,
 )
+from nfmr_dlsmc.runtime.parent_death import die_with_parent
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
@@ -357,14 +357,6 @@ def _new_run_dir(out: Path, config: Path) -> Path:
     return path
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the launcher dies, even by SIGKILL (Linux)."""
-    try:
-        ctypes.CDLL('libc.so.6', use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-    except OSError:
-        pass
-
-
 def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
     """
     Start ``python -m module args`` in its own session, logging to ``<run_dir>/<name>.log``.
@@ -376,7 +368,7 @@ def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
     with log.open('w') as fh:
         process = subprocess.Popen([sys.executable, '-m', module, *args], stdout=fh,
                                    stderr=subprocess.STDOUT, env=env, start_new_session=True,
-                                   preexec_fn=_die_with_parent)
+                                   preexec_fn=die_with_parent)
     return _Child(name, process, log)
 
 

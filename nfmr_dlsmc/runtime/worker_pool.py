@@ -1,12 +1,16 @@
 """
 Worker processes for the commands that spread runs over the cores.
 
-They stop at once on Ctrl-C or SIGTERM instead of finishing every queued run first.
+They stop at once on Ctrl-C or SIGTERM instead of finishing every queued run first, and
+die with the command when it is killed outright.
 """
 
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 import os
+import signal
+
+from nfmr_dlsmc.runtime.parent_death import die_with_parent
 
 
 @contextmanager
@@ -20,7 +24,7 @@ def worker_pool(jobs: int, quiet: bool = False):
     (KeyboardInterrupt included) cancels the queued runs and terminates the workers, so
     that an interrupted command ends within a second rather than after its last run.
     """
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_quiet_stdout if quiet else None)
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_start_worker, initargs=(quiet,))
     try:
         yield pool
     except BaseException:
@@ -37,8 +41,15 @@ def worker_pool(jobs: int, quiet: bool = False):
     pool.shutdown(wait=True)
 
 
-def _quiet_stdout() -> None:
-    """Point this process's file descriptor 1 at /dev/null."""
+def _start_worker(quiet: bool) -> None:
+    """
+    Make this worker end with the command, even a command killed by SIGKILL or a timeout.
+
+    With ``quiet``, also point its file descriptor 1 at /dev/null.
+    """
+    die_with_parent(signal.SIGKILL)
+    if not quiet:
+        return
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.close(devnull)
