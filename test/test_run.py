@@ -377,6 +377,17 @@ def test_a_lockstep_run_with_slow_late_odometry_ticks_every_step(tmp_path):
     assert stamps[0] == 0.0
 
 
+def test_sensing_on_the_command_line_replaces_the_files_preset(tmp_path):
+    # robot_harsh_case1.yaml says `sensing: harsh`; --sensing good replaces it (the sim
+    # refused the two together: "conflicts with sensing = 'harsh'").
+    proc = start_run(tmp_path, 'config/robot_harsh_case1.yaml', '--duration',
+                     '0.3', '--no-compare', '--sensing', 'good')
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    # `good`: the first odometry 10 ms late (`harsh`: 40 ms), then a tick per step.
+    assert f'{round((0.3 - 0.010) / 0.001) + 1} control ticks (0 stopped by safety)' in stdout
+
+
 def test_the_end_says_how_the_run_kept_its_timing(short_run):
     # In lockstep the loop's periods are on simulated time: 1 kHz exactly, no overrun.
     code, stdout, _ = short_run

@@ -301,15 +301,22 @@ def _sim_args(config: Path, options: RunOptions, initial_pose) -> list[str]:
             '-p', f"gui:={'true' if options.gui else 'false'}",
             '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
             '-p', f'max_time:={float(options.duration)!r}',
-            *(arg for key, value in _sensing_values(options.sensing).items()
-              for arg in ('-p', f'{key}:={float(value)!r}')),
+            *_sensing_args(options.sensing),
             *(('-p', f'initial_pose:={[float(v) for v in initial_pose]!r}')
               if options.path is not None else ())]
 
 
-def _sensing_values(preset: str | None) -> dict:
-    """Return the sim parameters a sensing preset sets ({} for None)."""
-    return {} if preset is None else dict(SENSING_PRESETS[preset])
+def _sensing_args(preset: str | None) -> list[str]:
+    """
+    Return the sim's ROS arguments of a sensing preset ([] for None).
+
+    Its odometry values, and no preset name: ``--sensing`` replaces whatever the file says
+    of the odometry, its own ``sensing:`` preset included (both would conflict in the sim).
+    """
+    if preset is None:
+        return []
+    values = [f'{key}:={float(value)!r}' for key, value in SENSING_PRESETS[preset].items()]
+    return [arg for value in ["sensing:=''", *values] for arg in ('-p', value)]
 
 
 def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
