@@ -9,6 +9,7 @@ from mcap_ros2.decoder import DecoderFactory
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.reindex import reindex
 from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.rosbag2 import Reader
@@ -87,9 +88,19 @@ def test_what_is_not_a_bag_is_one_line_and_exit_2(tmp_path, make, needle):
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
-def test_a_corrupted_chunk_ends_the_bag_where_it_starts(tmp_path):
-    # Bytes flipped inside a compressed chunk (a bad zstd frame): read up to it, no error;
-    # nfmr-analyze and nfmr-reindex then work from the readable part.
+def records(data: bytes) -> list[tuple[int, int, int]]:
+    """Return (opcode, start, end) of each record of an MCAP file, magic excluded."""
+    found, position = [], 8
+    while position + 9 <= len(data):
+        end = position + 9 + int.from_bytes(data[position + 1:position + 9], 'little')
+        found.append((data[position], position, end))
+        position = end
+    return found
+
+
+def test_a_corrupt_chunk_in_the_middle_is_skipped_and_the_chunks_after_it_are_read(tmp_path):
+    # Bytes zeroed inside one compressed chunk (a bad zstd frame, a failing CRC): its
+    # messages are lost, never read as wrong ones; the intact chunks after it are read.
     bag = tmp_path / 'bag'
     with BagWriter(bag, chunk_size=4096) as writer:
         writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
@@ -97,13 +108,43 @@ def test_a_corrupted_chunk_ends_the_bag_where_it_starts(tmp_path):
             writer.write('/state', 10**9 + k * 10**6,
                          serialize_message(Float64MultiArray(data=[float(k)] * 8)))
     data = bytearray(writer.path.read_bytes())
-    middle = len(data) // 2
+    chunks = [(start, end) for opcode, start, end in records(bytes(data)) if opcode == 0x06]
+    start, end = chunks[len(chunks) // 2]
+    middle = (start + end) // 2
     data[middle:middle + 64] = bytes(64)
+    writer.path.write_bytes(bytes(data))
+    contents = read_bag(bag)
+    assert not contents.truncated and contents.corrupt_chunks == 1
+    assert contents.corrupt_bytes == end - start
+    values = [deserialize_message(m.data, Float64MultiArray).data[0] for m in contents.messages]
+    # Every message read is intact and in order; one run of them is missing, at the chunk.
+    gaps = np.flatnonzero(np.diff(values) != 1.0)
+    assert values[0] == 0.0 and values[-1] == 2999.0 and len(gaps) == 1
+    assert 'damaged bag' in contents.warning() and '1 corrupt chunk(s) skipped' in \
+        contents.warning()
+    result = reindex(bag)
+    assert result.rebuilt and result.messages == len(values)
+    assert not read_bag(bag).warning()
+
+
+def test_a_corrupt_record_header_ends_the_bag_where_it_starts(tmp_path):
+    # Zeroed across a record's opcode and length there is no telling where the next record
+    # starts: the bag is read up to it, as a truncated one.
+    bag = tmp_path / 'bag'
+    with BagWriter(bag, chunk_size=4096) as writer:
+        writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
+        for k in range(3000):
+            writer.write('/state', 10**9 + k * 10**6,
+                         serialize_message(Float64MultiArray(data=[float(k)] * 8)))
+    data = bytearray(writer.path.read_bytes())
+    chunks = [start for opcode, start, _ in records(bytes(data)) if opcode == 0x06]
+    start = chunks[len(chunks) // 2]
+    data[start:start + 9] = bytes(9)
     writer.path.write_bytes(bytes(data))
     contents = read_bag(bag)
     assert contents.truncated and 0 < len(contents.messages) < 3000
     values = [deserialize_message(m.data, Float64MultiArray).data[0] for m in contents.messages]
-    assert values == [float(k) for k in range(len(values))]  # every message read is intact
+    assert values == [float(k) for k in range(len(values))]
     assert reindex(bag).messages == len(values)
 
 

@@ -17,6 +17,8 @@ from nfmr_dlsmc.core.errors import NfmrError
 from zstandard import ZstdError
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
+#: The opcode of an MCAP chunk record.
+CHUNK_OPCODE = 0x06
 #: What reading a cut or corrupted record raises: its length runs past the end (EOFError,
 #: struct.error), its fields or compressed chunk do not decode or fail their CRC (McapError,
 #: ValueError, KeyError, zstandard's ZstdError). Chunk CRCs are checked, so corrupted bytes
@@ -52,9 +54,15 @@ class BagContents:
     topics : dict
         Topic -> (type name, channel metadata dict).
     truncated : bool
-        The file ended before its footer (e.g. the recorder was killed).
+        The file ended before its footer (e.g. the recorder was killed), or a record could
+        not be read and reading stopped there.
     unread_bytes : int
         Bytes after the last complete record that could not be used.
+    corrupt_chunks : int
+        Chunks skipped because their content failed its CRC or did not decompress; the
+        chunks after them were read.
+    corrupt_bytes : int
+        The size of those chunks [bytes].
 
     """
 
@@ -63,20 +71,30 @@ class BagContents:
     topics: dict = field(default_factory=dict)
     truncated: bool = False
     unread_bytes: int = 0
+    corrupt_chunks: int = 0
+    corrupt_bytes: int = 0
 
     def of(self, topic: str) -> list:
         """Return the messages of one topic, in order."""
         return [m for m in self.messages if m.topic == topic]
 
     def warning(self) -> str | None:
-        """Return a one-line note when the bag was truncated, else None."""
-        if not self.truncated:
+        """Return a one-line note when the bag was truncated or had corrupt chunks."""
+        if not (self.truncated or self.corrupt_chunks):
             return None
         span = (self.messages[-1].log_time - self.messages[0].log_time) * 1e-9 \
             if self.messages else 0.0
-        return (f'{self.path}: truncated bag (no footer): read {len(self.messages)} messages '
-                f'covering {span:.3f} s; the last {self.unread_bytes} bytes (an incomplete '
-                f'chunk) are lost')
+        notes = []
+        if self.corrupt_chunks:
+            notes.append(f'{self.corrupt_chunks} corrupt chunk(s) skipped ('
+                         f'{self.corrupt_bytes} bytes: their messages are lost, the chunks '
+                         'after them were read)')
+        if self.truncated:
+            notes.append(f'the last {self.unread_bytes} bytes (an incomplete or unreadable '
+                         'record) are lost')
+        kind = 'truncated bag (no footer)' if self.truncated else 'damaged bag'
+        return (f'{self.path}: {kind}: read {len(self.messages)} messages covering '
+                f"{span:.3f} s; {'; '.join(notes)}")
 
 
 def mcap_file(path) -> Path:
@@ -121,29 +139,52 @@ def iter_bag(path, topics=None, contents: BagContents | None = None):
         schemas, channels = {}, {}
         position = 0
         reader = StreamReader(stream, record_size_limit=1 << 31, validate_crcs=True)
-        try:
-            for record in reader.records:
-                if isinstance(record, Schema):
-                    schemas[record.id] = record
-                elif isinstance(record, Channel):
-                    schema = schemas.get(record.schema_id)
-                    type_name = schema.name if schema else ''
-                    channels[record.id] = (record.topic, type_name)
-                    contents.topics[record.topic] = (type_name, dict(record.metadata))
-                elif isinstance(record, Message):
-                    topic, type_name = channels[record.channel_id]
-                    if wanted is None or topic in wanted:
-                        yield BagMessage(topic, type_name, record.log_time, record.publish_time,
-                                         record.data)
-                elif isinstance(record, Footer):
+        while True:
+            try:
+                for record in reader.records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record
+                    elif isinstance(record, Channel):
+                        schema = schemas.get(record.schema_id)
+                        type_name = schema.name if schema else ''
+                        channels[record.id] = (record.topic, type_name)
+                        contents.topics[record.topic] = (type_name, dict(record.metadata))
+                    elif isinstance(record, Message):
+                        topic, type_name = channels[record.channel_id]
+                        if wanted is None or topic in wanted:
+                            yield BagMessage(topic, type_name, record.log_time,
+                                             record.publish_time, record.data)
+                    elif isinstance(record, Footer):
+                        break
+                    position = stream.tell()
+                else:
+                    contents.truncated = True
+                break
+            except _CUT_OR_CORRUPT:
+                # A chunk whose own length is sound is skipped whole and reading goes on
+                # after it; anything else ends the bag where it starts.
+                end = _chunk_end(stream, position, size)
+                if end is None:
+                    contents.truncated = True
                     break
-                position = stream.tell()
-            else:
-                contents.truncated = True
-        except _CUT_OR_CORRUPT:
-            contents.truncated = True
+                contents.corrupt_chunks += 1
+                contents.corrupt_bytes += end - position
+                stream.seek(end)
+                position = end
+                reader = StreamReader(stream, skip_magic=True, record_size_limit=1 << 31,
+                                      validate_crcs=True)
         if contents.truncated:
             contents.unread_bytes = max(0, size - position)
+
+
+def _chunk_end(stream, position: int, size: int) -> int | None:
+    """Return where the chunk record at ``position`` ends, or None if it is no chunk."""
+    stream.seek(position)
+    header = stream.read(1 + 8)  # opcode, then the record's length (uint64, little-endian)
+    if len(header) < 9 or header[0] != CHUNK_OPCODE:
+        return None
+    end = position + len(header) + int.from_bytes(header[1:], 'little')
+    return end if end <= size else None
 
 
 def read_bag(path, topics=None) -> BagContents:

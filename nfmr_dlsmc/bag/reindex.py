@@ -73,7 +73,8 @@ def reindex(path) -> ReindexResult:
     contents = BagContents(path=file)
     for _ in iter_bag(file, topics=(), contents=contents):  # channels and truncation only
         pass
-    if not contents.truncated and (bag / 'metadata.yaml').is_file():
+    damaged = contents.truncated or contents.corrupt_chunks
+    if not damaged and (bag / 'metadata.yaml').is_file():
         return ReindexResult(bag, False, 0, len(contents.topics), 0, None)
     # The kept original of an earlier reindex is rebuilt again into the bag's own file,
     # and stays as it is: no second .mcap beside it, no .before-reindex.before-reindex.

@@ -405,7 +405,7 @@ def replay(args: ReplayOptions) -> int:
         duration = _bag_duration(args.bag)
         while True:
             contents = replayer.play_once(args.bag, duration)
-            if contents.truncated:
+            if contents.warning():
                 print(f'nfmr-replay: warning: {contents.warning()}', file=sys.stderr)
             if not args.loop:
                 break
