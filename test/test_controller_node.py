@@ -410,3 +410,17 @@ def test_arrival_is_logged_once_and_named_on_diagnostics(setup, log):
     status = next(s for d in diagnostics for s in d.status if s.message.endswith('; arrived'))
     assert {v.key: v.value for v in status.values}['arrival'] == 'arrived'
     assert sum('arrived at t = ' in m for m in log.read()) == 1
+
+
+def test_a_clock_loop_beside_odometry_at_another_pace_says_so_once(setup, log):
+    # tick_source clock beside a sim in lockstep at a third of real time: odometry time
+    # runs at a third of the controller's clock, and it ticks three times per step.
+    node, peer = setup(tick_source='clock')
+    start = time.monotonic()
+    while not any('odometry time runs at' in line for line in log.read()):
+        assert time.monotonic() - start < 30.0, 'no warning within 30 s'
+        peer.send_odom(1.0, 4.0, 0.0, (time.monotonic() - start) / 3.0)
+        time.sleep(0.01)  # odometry at about 100 Hz of the wall clock
+    (line,) = [m for m in log.lines if 'odometry time runs at' in m]
+    ratio = float(line.split('odometry time runs at ')[1].split('x')[0])
+    assert 0.2 < ratio < 0.45 and 'use tick_source odom or sim_clock' in line

@@ -65,6 +65,7 @@ from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaLifecycleNode
 from nfmr_dlsmc.ros.scene import reference_markers, reference_path
+from nfmr_dlsmc.runtime.clock_rate import ClockRateWatch
 from nfmr_dlsmc.runtime.loop_stats import LoopStats
 from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, NodeOptions
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
@@ -147,6 +148,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
         self._reference = None  # (x_d [m], y_d [m], theta_d [rad]) of the latest tick
         self._stats = None
+        self._clock_rate = ClockRateWatch()  # tick_source clock: odometry's pace against ours
         self._state_layout = [MultiArrayDimension(
             label=','.join(STATE_FIELDS), size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
         self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
@@ -216,6 +218,7 @@ class ControllerNode(SchemaLifecycleNode):
                 self._reference = None
                 self._arrival = 0.0
                 self._stats = LoopStats(overrun_threshold=2.0 * self.session.params.dlsmc.dt)
+                self._clock_rate = ClockRateWatch()
                 self._active = True
             result = super().on_activate(state)  # the lifecycle publishers publish from here
             self._publish_path()
@@ -339,6 +342,14 @@ class ControllerNode(SchemaLifecycleNode):
                 sigma)
         if source == 'odom' and accepted:
             self._tick(stamp)
+        elif source == 'clock':
+            ratio = self._clock_rate.observe(stamp, self._now())
+            if ratio is not None:
+                self.get_logger().warning(
+                    f'odometry time runs at {ratio:.2f}x this node\'s clock: with tick_source '
+                    'clock the controller ticks on its own clock, not once per simulated '
+                    'step; beside a sim in lockstep or slower than real time use tick_source '
+                    'odom or sim_clock (or use_sim_time)')
 
     def _on_path(self, msg: Path) -> None:
         """Follow a path from outside from the next tick, or say why not."""
