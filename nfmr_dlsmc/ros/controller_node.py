@@ -346,7 +346,7 @@ class ControllerNode(SchemaLifecycleNode):
             ratio = self._clock_rate.observe(stamp, self._now())
             if ratio is not None:
                 self.get_logger().warning(
-                    f'odometry time runs at {ratio:.2f}x this node\'s clock: with tick_source '
+                    f"odometry time runs at {ratio:.2f}x this node's clock: with tick_source "
                     'clock the controller ticks on its own clock, not once per simulated '
                     'step; beside a sim in lockstep or slower than real time use tick_source '
                     'odom or sim_clock (or use_sim_time)')
