@@ -507,3 +507,27 @@ def test_another_source_on_the_runs_domain_ends_it_with_an_error(tmp_path):
     assert run.returncode == 1
     assert 'another ROS source reaches this run' in stderr
     assert 'control ticks' not in stdout  # no figures of mixed data
+
+
+def test_a_full_disk_stops_the_run_at_once_and_leaves_a_bag_reindex_opens(tmp_path):
+    # The file-size limit stands in for a full disk: the bag's next chunk cannot be written
+    # (EFBIG here, ENOSPC on a full disk: the same OSError to the recorder).
+    import resource
+
+    limit = 400_000  # [bytes] the first chunk fits, a later one does not
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    proc = subprocess.run([str(Path(sys.executable).parent / 'nfmr-run'), '--duration', '30',
+                           '--no-compare', '--out', str(tmp_path)], preexec_fn=limited,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1, proc.stderr
+    assert 'Traceback' not in proc.stderr
+    (line,) = [m for m in proc.stderr.splitlines() if m.startswith('nfmr-run: error:')]
+    assert 'bag_0.mcap cannot be written: File too large' in line and 'nfmr-reindex' in line
+    bag = Path(proc.stdout.strip().splitlines()[-1])
+    reindex = subprocess.run([str(Path(sys.executable).parent / 'nfmr-reindex'), str(bag)],
+                             capture_output=True, text=True, timeout=120)
+    assert reindex.returncode == 0, reindex.stderr
+    assert read_bag(bag).messages and not read_bag(bag).warning()

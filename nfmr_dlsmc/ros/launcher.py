@@ -267,6 +267,9 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         if recorder is not None:
             clock.drain()
             recorder.close()
+            if recorder.failure and status == 0:  # the disk filled up at the very end
+                status = 1
+                print(f'\nnfmr-run: error: {recorder.failure}', file=sys.stderr)
             executor.remove_node(recorder)
             recorder.destroy_node()
         executor.remove_node(manager)
@@ -511,6 +514,9 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
         clock.spin(0.05)
         stop.check()
         _check_children(children)
+        if clock.recorder is not None and clock.recorder.failure:
+            raise RunError(f'{clock.recorder.failure}; the run is stopped (nfmr-reindex '
+                           'recovers the chunks written)')
         foreign = clock.foreign_source()
         if foreign:
             raise RunError(f'another ROS source reaches this run ({foreign}): its data is not '

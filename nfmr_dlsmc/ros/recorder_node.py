@@ -59,6 +59,8 @@ class RecorderNode(Node):
         self._subscribed = {}
         self.received = 0
         self.last_clock_ns = 0
+        #: Why the bag stopped taking messages (a full disk), else None.
+        self.failure = None
         for topic, type_name in known_topics.items():
             if topic not in latched:
                 self._subscribe(topic, type_name, None)
@@ -116,8 +118,15 @@ class RecorderNode(Node):
             item = self._queue.get()
             if item is None:
                 return
+            if self.failure is not None:
+                continue  # the bag cannot take more: what comes is dropped, not queued
             topic, stamp, data = item
-            self.writer.write(topic, stamp, data)
+            try:
+                self.writer.write(topic, stamp, data)
+            except OSError as exc:  # a full disk, a file too large: the owner stops the run
+                self.failure = (f'the bag {self.writer.path} cannot be written: '
+                                f'{exc.strerror or exc}')
+                continue
             self.received += 1
 
     def pending(self) -> int:
@@ -125,8 +134,17 @@ class RecorderNode(Node):
         return self._queue.qsize()
 
     def close(self) -> None:
-        """Write what is queued and finish the bag (idempotent)."""
+        """
+        Write what is queued and finish the bag (idempotent).
+
+        After a write failed, finishing is tried too; where the disk still refuses, the
+        bag keeps the chunks written, which ``nfmr-reindex`` recovers.
+        """
         if self._writer_thread.is_alive():
             self._queue.put(None)
             self._writer_thread.join()
-        self.writer.finish()
+        try:
+            self.writer.finish()
+        except OSError as exc:
+            self.failure = self.failure or (f'the bag {self.writer.path} cannot be finished: '
+                                            f'{exc.strerror or exc}')
