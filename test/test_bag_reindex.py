@@ -98,21 +98,26 @@ def records(data: bytes) -> list[tuple[int, int, int]]:
     return found
 
 
-def test_a_corrupt_chunk_in_the_middle_is_skipped_and_the_chunks_after_it_are_read(tmp_path):
-    # Bytes zeroed inside one compressed chunk (a bad zstd frame, a failing CRC): its
-    # messages are lost, never read as wrong ones; the intact chunks after it are read.
+def finished_bag(tmp_path):
+    """Write a finished bag of 3000 numbered messages in small chunks; return it and its bytes."""
     bag = tmp_path / 'bag'
     with BagWriter(bag, chunk_size=4096) as writer:
         writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
         for k in range(3000):
             writer.write('/state', 10**9 + k * 10**6,
                          serialize_message(Float64MultiArray(data=[float(k)] * 8)))
-    data = bytearray(writer.path.read_bytes())
+    return bag, bytearray(writer.path.read_bytes())
+
+
+def test_a_corrupt_chunk_in_the_middle_is_skipped_and_the_chunks_after_it_are_read(tmp_path):
+    # Bytes zeroed inside one compressed chunk (a bad zstd frame, a failing CRC): its
+    # messages are lost, never read as wrong ones; the intact chunks after it are read.
+    bag, data = finished_bag(tmp_path)
     chunks = [(start, end) for opcode, start, end in records(bytes(data)) if opcode == 0x06]
     start, end = chunks[len(chunks) // 2]
     middle = (start + end) // 2
     data[middle:middle + 64] = bytes(64)
-    writer.path.write_bytes(bytes(data))
+    (bag / 'bag_0.mcap').write_bytes(bytes(data))
     contents = read_bag(bag)
     assert not contents.truncated and contents.corrupt_chunks == 1
     assert contents.corrupt_bytes == end - start
@@ -130,17 +135,11 @@ def test_a_corrupt_chunk_in_the_middle_is_skipped_and_the_chunks_after_it_are_re
 def test_a_corrupt_record_header_ends_the_bag_where_it_starts(tmp_path):
     # Zeroed across a record's opcode and length there is no telling where the next record
     # starts: the bag is read up to it, as a truncated one.
-    bag = tmp_path / 'bag'
-    with BagWriter(bag, chunk_size=4096) as writer:
-        writer.add_topic('/state', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
-        for k in range(3000):
-            writer.write('/state', 10**9 + k * 10**6,
-                         serialize_message(Float64MultiArray(data=[float(k)] * 8)))
-    data = bytearray(writer.path.read_bytes())
+    bag, data = finished_bag(tmp_path)
     chunks = [start for opcode, start, _ in records(bytes(data)) if opcode == 0x06]
     start = chunks[len(chunks) // 2]
     data[start:start + 9] = bytes(9)
-    writer.path.write_bytes(bytes(data))
+    (bag / 'bag_0.mcap').write_bytes(bytes(data))
     contents = read_bag(bag)
     assert contents.truncated and 0 < len(contents.messages) < 3000
     values = [deserialize_message(m.data, Float64MultiArray).data[0] for m in contents.messages]
