@@ -30,6 +30,7 @@ from nfmr_dlsmc.runtime.params import (
     load_gain_blocks,
     load_params_file,
     PATH,
+    path_values,
 )
 from nfmr_dlsmc.runtime.share import shipped_config
 
@@ -135,7 +136,7 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     if dt is not None:
         flat['control_rate'] = 1.0 / dt
     if path is not None:
-        flat.update({'trajectory.name': PATH, 'trajectory.path.file': str(path)})
+        flat.update(path_values(path))
     params = controller_params(flat)
     trajectory = (params.trajectory if trajectory_name is None
                   else make_trajectory(trajectory_name))

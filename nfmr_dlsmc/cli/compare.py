@@ -38,7 +38,7 @@ from nfmr_dlsmc.cli.common import (
     UsageError,
 )
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file, PATH, path_file
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
 from nfmr_dlsmc.runtime.share import shipped_config
 
 
@@ -100,7 +100,7 @@ def _run(args) -> int:
     reference = None
     if args.path is not None:
         flat = load_params_file(args.params or shipped_config('robot_case1.yaml'))
-        flat |= {'trajectory.name': PATH, 'trajectory.path.file': str(path_file(str(args.path)))}
+        flat |= path_values(path_file(str(args.path)))
         params = controller_params(flat)
         reference = params.trajectory
         if args.duration is None:

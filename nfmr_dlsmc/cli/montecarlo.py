@@ -38,7 +38,7 @@ from nfmr_dlsmc.cli.common import (
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file, PATH, path_file
+from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
 import numpy as np
 
 
@@ -97,7 +97,7 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     flat = load_params_file(args.params) if args.params else {}
     if args.path is not None:
-        flat |= {'trajectory.name': PATH, 'trajectory.path.file': str(path_file(str(args.path)))}
+        flat |= path_values(path_file(str(args.path)))
     params = controller_params(flat)
     if args.duration is None:  # a path's own and a margin to arrive, else the paper's
         args.duration = getattr(params.trajectory, 'duration',

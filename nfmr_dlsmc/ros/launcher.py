@@ -55,8 +55,8 @@ from nfmr_dlsmc.runtime.params import (
     load_params_file,
     NodeOptions,
     ParamsFileError,
-    PATH,
     path_file,
+    path_values,
 )
 from nfmr_dlsmc.runtime.parent_death import die_with_parent
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
@@ -171,7 +171,7 @@ def run(options: RunOptions) -> int:
     controller_flat = load_params_file(config, 'controller')
     if options.path is not None:
         options = replace(options, path=path_file(str(options.path)).absolute())
-        controller_flat |= _path_values(options.path)
+        controller_flat |= path_values(options.path)
     params = controller_params(controller_flat)
     if options.duration is None:  # a path's own (to the next 0.1 s), else the paper's
         duration = getattr(params.trajectory, 'duration', PAPER_DURATION - PATH_MARGIN)
@@ -283,11 +283,6 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     return status
 
 
-def _path_values(path: Path) -> dict:
-    """Return the controller parameters that follow the path file ``path``."""
-    return {'trajectory.name': PATH, 'trajectory.path.file': str(path)}
-
-
 def _sim_args(config: Path, options: RunOptions, initial_pose) -> list[str]:
     """
     Return the sim's ROS arguments (with ``--path``, the start pose of the path's).
@@ -328,7 +323,7 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
     # slower than real time slows the run down instead of breaking it.
     args = ['--ros-args', '--params-file', str(config), '-p', 'autostart:=false',
             '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true',
-            *(arg for key, value in (_path_values(options.path).items()
+            *(arg for key, value in (path_values(options.path).items()
                                      if options.path is not None else ())
               for arg in ('-p', f'{key}:={value}'))]
     if options.mode == 'realtime':

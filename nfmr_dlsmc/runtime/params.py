@@ -246,6 +246,11 @@ def _trajectory_parameters() -> list[Param]:
             *(replace(p, read_only=True) for p in params_of(ArrivalConfig))]
 
 
+def path_values(path) -> dict:
+    """Return the controller parameters that follow the path file ``path``."""
+    return {'trajectory.name': PATH, 'trajectory.path.file': str(path)}
+
+
 def path_file(name: str) -> Path:
     """
     Return where the path file ``trajectory.path.file = name`` is.
