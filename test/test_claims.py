@@ -370,6 +370,7 @@ def test_node_watchdog_stops_within_one_watchdog_period_of_the_timeout(monkeypat
     outputs = []
     node = SimpleNamespace(
         _values=values, session=session, _lock=threading.Lock(), _now=lambda: now['wall'],
+        _ages_on_sim_time=lambda: False,
         _tick=lambda control_time: outputs.append(session.tick(control_time, now['wall'])))
     t_last = 1.0
     _feed_until(session, t_last)

@@ -9,6 +9,7 @@ from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.controller_node import ControllerNode
 from nfmr_dlsmc.runtime.params import controller_parameters
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS as STATE_LABELS
 import numpy as np
 import pytest
 import rclpy
@@ -281,6 +282,43 @@ def test_with_sim_clock_odometry_ages_on_simulated_time(setup):
     speeds = [step(0.002 + 0.01 * k, odometry=False) for k in range(1, 20)]
     assert speeds[5] > 0.0  # 51 ms: within the timeout
     assert speeds[-1] == 0.0  # 191 ms of simulated time without odometry: stopped
+
+
+def test_with_sim_time_odometry_ticks_age_on_simulated_time(setup):
+    # nfmr-run in lockstep with odometry of every step: tick_source odom under use_sim_time.
+    # A step that takes longer than odom_timeout of wall time on a busy machine is no fault
+    # (the watchdog runs every watchdog_period of simulated time); only simulated time
+    # passing without odometry is.
+    node, peer = setup(use_sim_time=True, odom_timeout=0.1)
+    clock = peer.create_publisher(Clock, '/clock', QOS)
+    wait_for(lambda: clock.get_subscription_count() >= 1, what='the clock subscription')
+    state = lambda message: dict(zip(STATE_LABELS, message.data))  # noqa: E731
+
+    def advance(t):
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = int(t), int(round((t - int(t)) * 1e9))
+        clock.publish(msg)
+        wait_for(lambda: node.get_clock().now().nanoseconds >= int(round(t * 1e9)),
+                 what=f'the node clock at {t:g} s')
+
+    def step(t):
+        advance(t)
+        n = len(peer.states)
+        peer.send_odom(1.0, 4.0, 0.0, t)
+        wait_for(lambda: len(peer.states) > n, what='the tick of an odometry')
+
+    step(0.001)
+    pause = time.monotonic()
+    wait_for(lambda: time.monotonic() > pause + 0.3, what='a wall pause past the timeout')
+    for k in range(1, 6):  # 50 ms of simulated time, five watchdog periods, no odometry
+        advance(0.001 + 0.01 * k)
+    step(0.06)
+    for k in range(1, 25):
+        advance(0.06 + 0.01 * k)
+    wait_for(lambda: any(state(m)['stopped'] for _, m in peer.states), what='a stale stop')
+    first = next(state(m) for _, m in peer.states if state(m)['stopped'])
+    # Stopped once 100 ms of simulated time passed without odometry, within one period.
+    assert 0.06 + 0.1 <= first['control_time'] <= 0.06 + 0.1 + 0.02 + 1e-9
 
 
 def send_odom_in(peer, frame, x, t):

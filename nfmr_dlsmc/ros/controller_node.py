@@ -325,9 +325,7 @@ class ControllerNode(SchemaLifecycleNode):
         p = msg.pose.pose
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         source = self._values['tick_source']
-        # Odometry's age is judged on the clock that drives the ticks: with sim_clock the
-        # simulated time (in lockstep a slow machine stretches the wall, not the robot's time).
-        wall = max(self._now(), stamp) if source == 'sim_clock' else time.monotonic()
+        wall = max(self._now(), stamp) if self._ages_on_sim_time() else time.monotonic()
         covariance = msg.pose.covariance
         sigma = (math.sqrt(max(covariance[0], covariance[7], 0.0)),
                  math.sqrt(max(covariance[35], 0.0)))
@@ -383,14 +381,25 @@ class ControllerNode(SchemaLifecycleNode):
     def _now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
+    def _ages_on_sim_time(self) -> bool:
+        """
+        Whether odometry ages on simulated time rather than on the wall clock.
+
+        On the clock that drives the ticks: ``/clock`` with tick_source sim_clock, the node's
+        clock when it is simulated (use_sim_time). In lockstep a slow machine stretches the
+        wall between steps, not the robot's time; only simulated time passing without
+        odometry is stale odometry.
+        """
+        return (self._values['tick_source'] == 'sim_clock'
+                or self.get_clock().ros_time_is_active)
+
     def _tick(self, control_time: float) -> None:
         start = time.monotonic()
         with self._lock:  # no command after the zero of a deactivation
             if not self._active:
                 return
             out = self.session.tick(
-                control_time,
-                control_time if self._values['tick_source'] == 'sim_clock' else start)
+                control_time, control_time if self._ages_on_sim_time() else start)
             if out is None:
                 if self._values['tick_source'] == 'sim_clock':
                     # Before the first odometry (late by its latency): stand still, and
@@ -460,7 +469,8 @@ class ControllerNode(SchemaLifecycleNode):
         if self._values['tick_source'] != 'odom' or not self.session.started:
             return
         with self._lock:
-            stale = self.session.odometry_age(time.monotonic()) > self.session.odom_timeout
+            now = self._now() if self._ages_on_sim_time() else time.monotonic()
+            stale = self.session.odometry_age(now) > self.session.odom_timeout
         if stale:
             self._tick(self._now())
 

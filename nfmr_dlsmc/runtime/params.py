@@ -117,7 +117,8 @@ class NodeOptions:
     watchdog_period: float = param(0.01, 's', 'how often stale odometry is checked',
                                    POSITIVE, read_only=True)
     odom_timeout: float = param(0.25, 's', 'odometry older than this stops the robot (wall '
-                                'clock; simulated time with tick_source sim_clock)', POSITIVE)
+                                'clock; simulated time under use_sim_time or with '
+                                'tick_source sim_clock)', POSITIVE)
     odom_frame: str = param('odom', '', 'frame odometry must be in; other frames stop the '
                             'robot', non_empty('a frame name', 256))
     max_odom_jump: float = param(10.0, 'm', 'larger position jumps between odometry '
