@@ -251,9 +251,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         # stop the controller (zero speed) well within its odometry timeout, so that a run
         # that ended as planned ends without a safety stop.
         clock.spin(0.3)
-        controller.change('deactivate')
+        controller.change('deactivate')  # returns once its telemetry is acknowledged
         _stop_children(children[1:])
-        clock.spin(0.7)  # the sim's last messages
     except KeyboardInterrupt:
         status = 130
         print('\ninterrupted: stopping the run', file=sys.stderr)
@@ -262,7 +261,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         print(f'\nnfmr-run: error: {exc}', file=sys.stderr)
     finally:
         _stop_children(children[:1])  # the sim first: no new steps
-        clock.spin(1.0)  # deliver what the controller published for the last steps
+        if any(child.process.poll() is None for child in children[1:]):
+            clock.spin(1.0)  # deliver what the controller published for the last steps
         _stop_children(children[1:])
         if recorder is not None:
             clock.drain()
