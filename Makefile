@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.nfmr-installed
 
-.PHONY: setup run test bench report clean mutate
+.PHONY: setup run test bench report docs clean mutate
 
 setup: $(STAMP)
 
@@ -42,6 +42,10 @@ bench: setup
 
 report: setup
 	$(BIN)/nfmr-compare --out report
+
+# The parameter reference, generated from the schema (test_parameter_schema.py checks it).
+docs: setup
+	$(BIN)/python -m nfmr_dlsmc.analysis.parameter_reference doc/parameters.md
 
 # Mutation testing of the core laws and guards with the fast tests (doc/mutation.md; the
 # [mutmut] section of setup.cfg says which modules and tests). Incremental: mutants/ keeps

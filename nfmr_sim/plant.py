@@ -19,7 +19,7 @@ from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import check_start, sample_reference, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
-from nfmr_sim.sim_params import sim_settings
+from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, OdometrySample
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
@@ -167,4 +167,4 @@ def world_rtf(sim_seconds: float) -> dict:
 
 #: The pybullet chassis as ``--plant pybullet`` (entry point ``nfmr_dlsmc.plants``).
 PYBULLET = RobotPlant(name='pybullet', settings=sim_settings, simulate=simulate_pybullet,
-                      world_rtf=world_rtf)
+                      world_rtf=world_rtf, node_parameters=sim_parameters)

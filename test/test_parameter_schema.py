@@ -1,9 +1,10 @@
-"""One schema per parameter: the README tables, the config comments and the checks follow it."""
+"""One schema per parameter: the parameter reference, the config comments, the checks."""
 
 from dataclasses import fields, is_dataclass
 from pathlib import Path
 import re
 
+from nfmr_dlsmc.analysis.parameter_reference import main as write_reference, render
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.schema import (
     from_flat,
@@ -65,11 +66,24 @@ def _parameters_of_files():
                 yield where, ['controller'], '.'.join(keys[2:]), comment
 
 
+def test_the_parameter_reference_is_the_one_rendered_from_the_schema():
+    # make docs writes it; a schema change without it leaves the reference stale.
+    assert (ROOT / 'doc' / 'parameters.md').read_text() == render(), (
+        'doc/parameters.md is out of date: run make docs')
+
+
+def test_make_docs_writes_the_reference_and_refuses_two_files(tmp_path, capsys):
+    out = tmp_path / 'parameters.md'
+    assert write_reference([str(out)]) == 0 and out.read_text() == render()
+    assert write_reference([str(out), str(out)]) == 2
+    assert 'usage:' in capsys.readouterr().err
+
+
 @pytest.mark.parametrize('node', ['controller', 'sim'])
-def test_the_readme_holds_the_parameter_table_rendered_from_the_schema(node):
+def test_the_reference_holds_a_row_per_parameter_of_each_node(node):
     table = markdown_table(NODES[node])
-    assert table in (ROOT / 'README.md').read_text(), (
-        f'README.md: the {node} parameter table is out of date; it should read:\n{table}')
+    assert table in render()
+    assert table.count('\n| `') == len(NODES[node])
 
 
 def test_every_parameter_of_the_config_files_is_in_the_schema_with_its_unit():

@@ -12,7 +12,7 @@ ros2_controllers' generate_parameter_library):
   names (:func:`check_known`);
 - the nodes' declarations: defaults (:func:`defaults`), ROS parameter descriptors and
   which parameters may change live (``read_only``);
-- the parameter tables of the README (:func:`markdown_table`) and the Attributes section
+- the parameter tables of doc/parameters.md (:func:`markdown_table`) and the Attributes section
   of the class docstring (:func:`documented`).
 
 A rule that involves several parameters (``limits.v_max > limits.v_min``) is checked by
@@ -53,7 +53,7 @@ class Rule:
     Attributes
     ----------
     text : str
-        The rule as the README and ``ros2 param describe`` show it, e.g. ``> 0``.
+        The rule as doc/parameters.md and ``ros2 param describe`` show it, e.g. ``> 0``.
     check : callable or None
         ``check(name, value, unit)`` raises
         :class:`~nfmr_dlsmc.core.validation.ParameterError` for a value that breaks the

@@ -45,6 +45,10 @@ class RobotPlant:
         ``world_rtf(sim_seconds) -> dict``: the world stepped open loop for
         ``sim_seconds`` [s], for ``nfmr-bench`` (keys ``sim_s``, ``wall_s``,
         ``real_time_factor``).
+    node_parameters
+        ``node_parameters() -> list`` of :class:`~nfmr_dlsmc.core.schema.Param`: every parameter
+        of the simulator's node, in declaration order (the parameter reference,
+        doc/parameters.md).
 
     """
 
@@ -52,6 +56,7 @@ class RobotPlant:
     settings: Callable[[dict], Any]
     simulate: Callable[..., Any]
     world_rtf: Callable[[float], dict]
+    node_parameters: Callable[[], list]
 
 
 def robot_plant(name: str) -> RobotPlant:

@@ -4,7 +4,7 @@ Controller parameters: ROS-style YAML files <-> validated config objects.
 A parameter file has the ROS 2 form ``<node>: ros__parameters: {...}`` (``/**`` also
 matches any node). Nested mappings are flattened to the dotted names that ROS uses, e.g.
 ``outer: {C1: 0.6}`` -> ``outer.C1``. The controller node's parameters
-(:func:`controller_parameters`, the README's table) come from the schema of their config
+(:func:`controller_parameters`, doc/parameters.md) come from the schema of their config
 classes (:mod:`nfmr_dlsmc.core.schema`):
 
 - ``outer.*``, ``inner.*``, ``limits.*``, ``thetadot_filter``, ``thetadot_source`` and
