@@ -2,13 +2,14 @@
 Shared test set-up: this session's DDS traffic kept to itself, and an open-loop controller.
 
 DDS: loopback only, a domain of its own, held for the whole session as ``nfmr-run`` holds its
-own (so that a run of another session never takes it).
+own (so that a run of another session never takes it), and the run's discovery profile.
 """
 
 import os
 import signal
 
-from nfmr_dlsmc.runtime.ros_domain import reserve_domain
+from nfmr_dlsmc.runtime.ros_domain import DISCOVERY_PROFILE, reserve_domain
+from nfmr_dlsmc.runtime.share import shipped_config
 import pytest
 from ros_helpers import release_participants
 
@@ -21,6 +22,9 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 if 'ROS_DOMAIN_ID' not in os.environ:
     SESSION_DOMAIN = reserve_domain()  # released when the session's process ends
     os.environ['ROS_DOMAIN_ID'] = str(SESSION_DOMAIN.domain)
+# Fast DDS announcing as often as in a run: nodes the tests start are found in tenths of a
+# second, not at the 3 s announcement of the defaults (doc/design.md, D13).
+os.environ.setdefault(DISCOVERY_PROFILE[0], str(shipped_config(DISCOVERY_PROFILE[1])))
 
 
 @pytest.fixture(autouse=True)

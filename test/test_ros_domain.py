@@ -1,19 +1,33 @@
 """A run's own ROS domain: reserved by a bound discovery port, never one already taken."""
 
+import os
 import random
 import socket
+import subprocess
+import sys
+import xml.etree.ElementTree as ElementTree
 
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.runtime.ros_domain import discovery_port, DOMAINS, reserve_domain
+from nfmr_dlsmc.runtime.ros_domain import (
+    discovery_port,
+    DISCOVERY_PROFILE,
+    DOMAINS,
+    reserve_domain,
+)
+from nfmr_dlsmc.runtime.share import shipped_config
 import pytest
 
+VARIABLE, PROFILE = DISCOVERY_PROFILE
 
-def test_a_reserved_domain_is_held_until_released():
+
+def test_a_reserved_domain_is_held_until_released(monkeypatch):
+    monkeypatch.delenv(VARIABLE, raising=False)
     first = reserve_domain(rng=random.Random(1))
     try:
         assert first.domain in DOMAINS
         assert first.environment() == {'ROS_DOMAIN_ID': str(first.domain),
-                                       'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
+                                       'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST',
+                                       VARIABLE: str(shipped_config(PROFILE))}
         probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         with pytest.raises(OSError):  # taken: its first discovery port is bound
             probe.bind(('0.0.0.0', discovery_port(first.domain)))
@@ -42,3 +56,25 @@ def test_a_domain_outside_what_ros_allows_is_refused(domain):
 
 def test_a_requested_domain_is_taken_as_it_is():
     assert reserve_domain(7).domain == 7
+
+
+def test_a_fast_dds_profile_the_user_names_is_kept(monkeypatch, tmp_path):
+    own = tmp_path / 'mine.xml'
+    monkeypatch.setenv(VARIABLE, str(own))
+    assert reserve_domain(7).environment()[VARIABLE] == str(own)
+
+
+def test_the_run_profile_announces_often_and_fast_dds_takes_it():
+    root = ElementTree.parse(shipped_config(PROFILE)).getroot()
+    ns = {'dds': 'http://www.eprosima.com'}
+    lease = root.find('.//dds:leaseAnnouncement', ns)
+    period = int(lease.find('dds:sec', ns).text) + int(lease.find('dds:nanosec', ns).text) * 1e-9
+    assert 0.0 < period <= 0.5  # [s] Fast DDS's default is 3 s
+    # A participant made with it: Fast DDS names any profile it cannot read on stderr.
+    env = {**os.environ, **reserve_domain(9).environment(), VARIABLE: str(
+        shipped_config(PROFILE))}
+    made = subprocess.run([sys.executable, '-c', 'import rclpy; rclpy.init(); '
+                           "rclpy.create_node('profile_check'); print('made')"],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert made.returncode == 0 and made.stdout.strip() == 'made', made.stderr
+    assert 'XMLPARSER' not in made.stderr and 'Error' not in made.stderr, made.stderr
