@@ -25,11 +25,16 @@ class Spinner:
         self.thread.join(timeout=5.0)
 
 
-def wait_for(predicate, timeout=10.0, what='condition'):
-    """Poll ``predicate`` until true; fail the test after ``timeout`` seconds."""
+def wait_for(predicate, timeout=10.0, what='condition', seen=None):
+    """
+    Poll ``predicate`` until true; fail the test after ``timeout`` seconds.
+
+    ``seen()``, if given, says in the failure what there was instead.
+    """
     deadline = time.monotonic() + timeout
     while not predicate():
-        assert time.monotonic() < deadline, f'{what} not met within {timeout} s'
+        assert time.monotonic() < deadline, (
+            f'{what} not met within {timeout} s' + ('' if seen is None else f'; seen: {seen()}'))
         time.sleep(0.002)
 
 

@@ -391,7 +391,7 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
     for k, (message, says) in enumerate(refusals):
         publisher.publish(message)
         wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1, timeout=30.0,
-                 what='a refusal')
+                 what=f'refusal {k + 1} ({says})', seen=lambda: log.lines)
         assert says in log.lines[-1] and 'the previous reference stays' in log.lines[-1]
     drive(peer, 5, start_t=0.005)
     assert dict(zip(labels, peer.states[-1][1].data))['t'] == pytest.approx(0.009)

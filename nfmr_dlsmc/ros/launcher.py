@@ -378,10 +378,16 @@ def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
 
 
 def _stop_children(children: list) -> None:
-    """SIGINT every live child, then kill what is still alive after STOP_TIMEOUT."""
+    """
+    SIGINT every live child, then kill what is still alive after STOP_TIMEOUT.
+
+    A stopped child (SIGSTOP: a stalled run) is continued after its SIGINT, so that it
+    ends at once as the others do instead of being killed after STOP_TIMEOUT.
+    """
     for child in children:
         if child.process.poll() is None:
             child.process.send_signal(signal.SIGINT)
+            child.process.send_signal(signal.SIGCONT)
     deadline = time.monotonic() + STOP_TIMEOUT
     for child in children:
         try:
