@@ -23,6 +23,10 @@ setup(
         'pyyaml>=6,<7',
         'pybullet>=3.2.6,<4',
         'mcap>=1.2,<2',
+        # The chassis study of nfmr-tune --plant pybullet (doc/design.md, D19) and its
+        # storage (SQLAlchemy, whose errors name a storage that cannot be opened).
+        'optuna>=5,<6',
+        'sqlalchemy>=2,<3',
         'ros-jazzy-rclpy>=7.1,<8',
         'ros-jazzy-common-interfaces>=5.3,<6',
         'ros-jazzy-rmw-fastrtps-cpp>=8.4,<9',

@@ -31,7 +31,7 @@ THIRD_PARTY = {
     'plants': {'numpy', 'scipy'},
     'runtime': {'numpy', 'yaml', 'ament_index_python'},
     'bag': {'numpy', 'yaml', 'mcap', 'zstandard'},
-    'analysis': {'numpy', 'yaml', 'matplotlib', 'PIL'},
+    'analysis': {'numpy', 'yaml', 'matplotlib', 'PIL', 'optuna', 'sqlalchemy'},
     'ros': {'numpy', 'yaml', 'matplotlib', 'rclpy', 'builtin_interfaces', 'geometry_msgs',
             'nav_msgs', 'sensor_msgs', 'std_msgs', 'rosgraph_msgs', 'diagnostic_msgs',
             'rcl_interfaces', 'lifecycle_msgs', 'std_srvs', 'visualization_msgs'},

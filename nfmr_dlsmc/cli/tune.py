@@ -1,20 +1,39 @@
 """
-``nfmr-tune``: search the outer-loop gains for the fastest return, under the same limits.
+``nfmr-tune``: tune the controller's gains, on the kinematic model or on the chassis.
 
-The search is :mod:`nfmr_dlsmc.analysis.outer_tuning`'s.
+Without ``--plant`` (or ``--plant kinematic``): search the outer-loop gains for the
+fastest return, under the same limits (:mod:`nfmr_dlsmc.analysis.outer_tuning`). With
+``--plant pybullet``: an Optuna study over the robot profile's gains and options on the
+chassis and sensing of a parameter file (:mod:`nfmr_dlsmc.analysis.chassis_tuning`).
 """
 
 import argparse
 import json
 import math
 import os
+from pathlib import Path
 import sys
 
+from nfmr_dlsmc.analysis.chassis_search_space import parse_range, search_space
+from nfmr_dlsmc.analysis.chassis_tuning import (
+    load_tuning,
+    make_scenarios,
+    open_study,
+    run_study,
+    study_report,
+    TuningSetup,
+)
+from nfmr_dlsmc.analysis.chassis_tuning_report import (
+    format_report,
+    plot_history,
+    plot_importances,
+    write_tuned_params,
+)
 from nfmr_dlsmc.analysis.outer_tuning import (
     format_tuning,
     RATIOS,
     tune_outer_gains,
-    write_tuned_params,
+    write_tuned_params as write_outer_gains,
 )
 from nfmr_dlsmc.cli.common import (
     add_output_file,
@@ -26,34 +45,102 @@ from nfmr_dlsmc.cli.common import (
     positive_integer,
     positive_number,
     run_command,
+    UsageError,
 )
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.share import shipped_config
+
+#: The kinematic search's own options and their defaults (None on the command line: not
+#: given, which --plant pybullet requires).
+KINEMATIC_DEFAULTS = {'candidates': 300, 'finalists': 8, 'screen_starts': 60, 'n': 500,
+                      'ratio': 'fixed'}
+#: The chassis study's own options (None: not given, which the kinematic search requires).
+PYBULLET_OPTIONS = ('sensing', 'trials', 'timeout', 'storage', 'study', 'range', 'starts',
+                    'hold_from', 'prune_distance')
+#: Per plant: the default --out, --duration [s] and --x0-range (dx [m], dy [m], dth [rad]).
+PLANT_DEFAULTS = {
+    'kinematic': {'out': 'tuned_outer.yaml', 'duration': 100.0,
+                  'x0_range': (5.0, 5.0, math.pi)},
+    'pybullet': {'out': 'tuned_robot.yaml', 'duration': 30.0, 'x0_range': (1.0, 1.0, 0.5)},
+}
+
+
+class _FlagFileParser(OneLineParser):
+    """Reads ``@FILE`` as more arguments: whitespace-separated, ``#`` starting a comment."""
+
+    def convert_arg_line_to_args(self, arg_line):
+        """Return the arguments of one line of a flag file."""
+        return arg_line.split('#', 1)[0].split()
+
+
+def _option_name(dest: str) -> str:
+    return '--' + dest.replace('_', '-')
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(
-        prog='nfmr-tune',
-        description='Search the outer-loop gains for the fastest return, under the same '
-                    'limits, and write them as a parameter file.')
-    parser.add_argument('--candidates', type=positive_integer, default=300)
-    parser.add_argument('--finalists', type=positive_integer, default=8)
-    parser.add_argument('--screen-starts', type=positive_integer, default=60,
-                        help='random starts each finalist must bring back (stage 2)')
-    parser.add_argument('--n', type=positive_integer, default=500,
-                        help='random starts of the final check')
-    parser.add_argument('--x0-range', type=float, nargs=3, default=(5.0, 5.0, math.pi),
-                        metavar=('DX', 'DY', 'DTH'))
-    parser.add_argument('--duration', type=positive_number, default=100.0,
-                        help='final check [s]')
+    parser = _FlagFileParser(
+        prog='nfmr-tune', fromfile_prefix_chars='@',
+        description='Tune the controller and write the result as a parameter file: the '
+                    'outer-loop gains for the fastest return on the kinematic model '
+                    '(default), or with --plant pybullet the robot profile on the chassis '
+                    'of --params under --sensing (an Optuna study). @FILE reads more '
+                    'arguments from FILE.')
+    parser.add_argument('--plant', choices=tuple(PLANT_DEFAULTS), default='kinematic',
+                        help='kinematic: the outer-gain search; pybullet: the study on the '
+                             'chassis (default --out tuned_robot.yaml)')
+    kinematic = parser.add_argument_group('the kinematic search')
+    kinematic.add_argument('--candidates', type=positive_integer,
+                           help=f"gain sets (default {KINEMATIC_DEFAULTS['candidates']})")
+    kinematic.add_argument('--finalists', type=positive_integer,
+                           help=f"default {KINEMATIC_DEFAULTS['finalists']}")
+    kinematic.add_argument('--screen-starts', type=positive_integer,
+                           help='random starts each finalist must bring back (stage 2; '
+                                f"default {KINEMATIC_DEFAULTS['screen_starts']})")
+    kinematic.add_argument('--n', type=positive_integer,
+                           help='random starts of the final check (default '
+                                f"{KINEMATIC_DEFAULTS['n']})")
+    kinematic.add_argument('--ratio', choices=RATIOS,
+                           help='C1:C2 fixed, adapted to the initial error, or candidates of '
+                                'both kinds (default: fixed)')
+    study = parser.add_argument_group('the study on the chassis (--plant pybullet)')
+    study.add_argument('--sensing', choices=tuple(SENSING_PRESETS),
+                       help="odometry preset (default: the file's own)")
+    study.add_argument('--trials', type=positive_integer,
+                       help='finished trials the study is to have; a resumed study runs the '
+                            'rest (default 100)')
+    study.add_argument('--timeout', type=positive_number, metavar='SECONDS',
+                       help='start no trial after this long')
+    study.add_argument('--storage', metavar='URL',
+                       help='Optuna RDB storage (SQLAlchemy URL; default '
+                            'sqlite:///<folder of --out>/study.db)')
+    study.add_argument('--study', metavar='NAME', help='study name (default: the stem of --out)')
+    study.add_argument('--range', action='append', metavar='NAME=LOW:HIGH',
+                       help='search NAME in [LOW, HIGH] (log-uniform if LOW > 0), fix it '
+                            '(NAME=VALUE) or list its choices (thetadot_source=A,B); '
+                            'repeatable, e.g. in an @FILE')
+    study.add_argument('--starts', type=non_negative_integer,
+                       help='random starts on each of circle and lemniscate (default 1)')
+    study.add_argument('--hold-from', type=positive_number, metavar='SECONDS',
+                       help='start of the hold window (default 15)')
+    study.add_argument('--prune-distance', type=positive_number, metavar='METRES',
+                       help='a run farther than this from the reference in the hold window '
+                            '(or 3 m farther than it started, before) is stopped and the '
+                            'trial pruned (default 0.05)')
+    parser.add_argument('--x0-range', type=float, nargs=3, metavar=('DX', 'DY', 'DTH'),
+                        help='random starts uniform in +-(DX [m], DY [m], DTH [rad]) around '
+                             "the trajectory's start (default 5 5 pi; pybullet 1 1 0.5)")
+    parser.add_argument('--duration', type=positive_number,
+                        help='final check [s] (default 100); pybullet: each run (default 30)')
     parser.add_argument('--seed', type=non_negative_integer, default=0)
-    parser.add_argument('--ratio', choices=RATIOS, default='fixed',
-                        help='C1:C2 fixed, adapted to the initial error, or candidates of '
-                             'both kinds (default: fixed)')
-    parser.add_argument('--params', metavar='FILE.yaml', help='starting parameter file')
-    add_output_file(parser, 'tuned_outer.yaml', 'parameter file')
+    parser.add_argument('--params', metavar='FILE.yaml',
+                        help='starting parameter file (pybullet: its sim section is the '
+                             'chassis; default config/robot_case1.yaml)')
+    add_output_file(parser, PLANT_DEFAULTS['kinematic']['out'], 'parameter file')
+    parser.set_defaults(out=None)
     parser.add_argument('--json', action='store_true')
     parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1,
-                        help='processes sharing each batch (default: all cores)')
+                        help='processes sharing the work (default: all cores)')
     return parser
 
 
@@ -63,6 +150,23 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
+    for key, value in PLANT_DEFAULTS[args.plant].items():
+        if getattr(args, key) is None:
+            setattr(args, key, Path(value) if key == 'out' else value)
+    mine, others = ((KINEMATIC_DEFAULTS, PYBULLET_OPTIONS) if args.plant == 'kinematic'
+                    else (PYBULLET_OPTIONS, KINEMATIC_DEFAULTS))
+    for dest in others:
+        if getattr(args, dest) is not None:
+            raise UsageError(f'{_option_name(dest)} does not apply to --plant {args.plant}')
+    if args.plant == 'kinematic':
+        for dest, default in mine.items():
+            if getattr(args, dest) is None:
+                setattr(args, dest, default)
+        return _tune_kinematic(args)
+    return _tune_on_chassis(args)
+
+
+def _tune_kinematic(args) -> int:
     check_output_file(args.out, args.force)
     params = controller_params(load_params_file(args.params) if args.params else {})
     check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.finalists))
@@ -70,11 +174,52 @@ def _run(args) -> int:
         params, args.candidates, args.finalists, args.screen_starts, args.n, args.x0_range,
         args.duration, args.seed, args.ratio, args.jobs,
         lambda text: print(text, file=sys.stderr, flush=True))
-    write_tuned_params(args.out, report)
+    write_outer_gains(args.out, report)
     if args.json:
         print(json.dumps(json_ready(report)))
     else:
         print(format_tuning(report, args.n, args.out))
+    return 0
+
+
+def _tune_on_chassis(args) -> int:
+    space = search_space(parse_range(text) for text in args.range or ())
+    setup = TuningSetup(
+        Path(args.params) if args.params else shipped_config('robot_case1.yaml'),
+        args.sensing, space,
+        make_scenarios(1 if args.starts is None else args.starts, args.x0_range, args.seed),
+        args.duration, 15.0 if args.hold_from is None else args.hold_from,
+        0.05 if args.prune_distance is None else args.prune_distance)
+    tuning = load_tuning(setup)
+    out = args.out
+    history = out.with_name(f'{out.stem}_history.png')
+    importances = out.with_name(f'{out.stem}_importances.png')
+    check_output_file(out, args.force)
+    check_run_length(setup.duration, tuning.evaluations[0].params.dlsmc.dt, args.jobs)
+    url = args.storage or f"sqlite:///{out.parent.resolve() / 'study.db'}"
+    name = args.study or out.stem
+    study = open_study(url, name, tuning, args.force)
+    trials = 100 if args.trials is None else args.trials
+    try:
+        run_study(setup, url, name, trials, args.timeout, args.seed, args.jobs,
+                  lambda text: print(text, file=sys.stderr, flush=True))
+    except KeyboardInterrupt:
+        print(f'\nnfmr-tune: study {name} in {url} keeps its finished trials; the same '
+              'command resumes it', file=sys.stderr)
+        raise
+    report = study_report(study, tuning)
+    chassis = tuning.identity()['chassis']
+    write_tuned_params(out, report, chassis)
+    plot_history(study, history)
+    written = [out, history]
+    if plot_importances(study, importances):
+        written.append(importances)
+    report['written'] = [str(p) for p in written]
+    report['storage'] = url
+    if args.json:
+        print(json.dumps(json_ready(report)))
+    else:
+        print(format_report(report, chassis, written))
     return 0
 
 
