@@ -86,7 +86,7 @@ class Diverged(Exception):
 
     def __init__(self, t: float, distance: float, bound: float):
         self.t, self.distance, self.bound = t, distance, bound
-        super().__init__(f'distance {distance:.3g} m > {bound:.3g} m at t = {t:.2f} s')
+        super().__init__(f'distance {distance:.4g} m > {bound:.4g} m at t = {t:.2f} s')
 
 
 class DivergenceWatch:
@@ -265,23 +265,24 @@ class Tuning:
         """
         Return what a study made with this tuning is for, as JSON stores it.
 
-        The chassis (the world's chassis, motors and friction, the controller's geometry,
-        limits and steering mode), the odometry and disturbances, the scenarios (start
-        poses resolved), the run length, the hold window and the objective.
+        By parameter name: the chassis (the world's ``chassis.*``, ``motors.*``,
+        ``friction.*`` and ``physics_dt``, the controller's ``geometry.*``, ``limits.*`` and
+        ``steering.*``), the odometry and disturbances (``disturbance.*``); then the
+        scenarios (start poses resolved), the run length, the hold window and the objective.
         """
         first = self.evaluations[0]
         world, params = first.world, first.params
-        chassis = {'physics_dt': world.physics_dt,
-                   **_prefixed('chassis', asdict(world.chassis)),
-                   **_prefixed('motors', asdict(world.motors)),
-                   **_prefixed('friction', asdict(world.friction)),
-                   **_prefixed('geometry', asdict(params.geometry)),
-                   **_prefixed('limits', asdict(params.dlsmc.limits)),
-                   **_prefixed('steering', asdict(params.steering))}
         scenarios = [{'trajectory': type(e.trajectory).__name__.lower(), 'x0': list(e.x0)}
                      for e in self.evaluations]
         return json.loads(json.dumps({
-            'chassis': chassis, 'odometry': asdict(world.disturbance),
+            'physics_dt': world.physics_dt,
+            **_prefixed('chassis', asdict(world.chassis)),
+            **_prefixed('motors', asdict(world.motors)),
+            **_prefixed('friction', asdict(world.friction)),
+            **_prefixed('geometry', asdict(params.geometry)),
+            **_prefixed('limits', asdict(params.dlsmc.limits)),
+            **_prefixed('steering', asdict(params.steering)),
+            **_prefixed('disturbance', asdict(world.disturbance)),
             'scenarios': scenarios, 'duration': self.setup.duration,
             'hold_from': self.setup.hold_from, 'objective': [list(t) for t in OBJECTIVE_TERMS],
         }))

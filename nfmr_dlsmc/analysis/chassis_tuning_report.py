@@ -9,9 +9,9 @@ and the importance of each searched parameter (Optuna's PED-ANOVA evaluator).
 
 import json
 from pathlib import Path
+import textwrap
 
 from nfmr_dlsmc.analysis.chassis_tuning import is_feasible, is_untuned, OBJECTIVE_TERMS
-from nfmr_dlsmc.core.metrics import format_metric
 from nfmr_dlsmc.runtime.params import read_yaml
 import optuna
 from optuna.trial import TrialState
@@ -20,6 +20,8 @@ import yaml
 __all__ = ['format_report', 'plot_history', 'plot_importances', 'scenario_label',
            'write_tuned_params']
 
+#: Width of the header's lines of the tuned file, after '# ' [characters].
+_HEADER_WIDTH = 94
 #: The figures of a scenario in the report: (label, key, unit shown, factor to it).
 _SHOWN = (('1 cm at', 't_conv_1cm', 's', 1.0), ('distance p99', 'hold_distance_p99', 'mm', 1e3),
           ('theta_e p99', 'hold_theta_e_p99', 'mrad', 1e3),
@@ -37,7 +39,7 @@ def _figures_line(figures: dict) -> str:
     parts = []
     for label, key, unit, factor in _SHOWN:
         value = figures[key]
-        shown = 'never' if value is None else f'{format_metric(value * factor)} {unit}'
+        shown = 'never' if value is None else f'{value * factor:.3g} {unit}'
         parts.append(f'{label} {shown}')
     return ', '.join(parts)
 
@@ -65,14 +67,13 @@ def _summary_lines(report: dict, chassis: dict) -> list:
            f"{untuned['objective']:.4g} untuned (#{untuned['number']})"
            if untuned['objective'] is not None else
            f"untuned {untuned['state']} (#{untuned['number']})"),
-        f"scenarios ({report['duration']:g} s each, hold after {report['hold_from']:g} s), "
-        'tuned' + (' | untuned' if untuned and untuned['objective'] is not None else '') + ':',
+        f"scenarios ({report['duration']:g} s each, hold after {report['hold_from']:g} s):",
     ]
     for k, scenario in enumerate(report['scenarios']):
-        line = f'  {scenario_label(scenario)}: {_figures_line(best["figures"][k])}'
+        lines += [f'  {scenario_label(scenario)}',
+                  f'    tuned:   {_figures_line(best["figures"][k])}']
         if untuned and untuned['objective'] is not None:
-            line += f' | {_figures_line(untuned["figures"][k])}'
-        lines.append(line)
+            lines.append(f'    untuned: {_figures_line(untuned["figures"][k])}')
     return lines
 
 
@@ -87,7 +88,7 @@ def write_tuned_params(path: Path, report: dict, chassis: dict) -> None:
     report : dict
         :func:`~nfmr_dlsmc.analysis.chassis_tuning.study_report`.
     chassis : dict
-        ``Tuning.identity()['chassis']``, for the header.
+        ``Tuning.identity()``: the chassis named in the header.
 
     """
     document = read_yaml(report['params_file'])
@@ -102,8 +103,13 @@ def write_tuned_params(path: Path, report: dict, chassis: dict) -> None:
         'Written by nfmr-tune --plant pybullet: the controller of '
         f"{report['params_file']} with {', '.join(report['best']['params'])} tuned "
         '(everything else as there)', *_summary_lines(report, chassis)]
+    wrapped = []
+    for line in header:
+        indent = ' ' * (len(line) - len(line.lstrip()) + 2)
+        wrapped += textwrap.wrap(line, _HEADER_WIDTH, subsequent_indent=indent,
+                                 break_on_hyphens=False)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(''.join(f'# {line}\n' for line in header)
+    path.write_text(''.join(f'# {line}\n' for line in wrapped)
                     + f'# {json.dumps(report)}\n'
                     + yaml.safe_dump(document, sort_keys=False))
 

@@ -208,7 +208,7 @@ def _tune_on_chassis(args) -> int:
               'command resumes it', file=sys.stderr)
         raise
     report = study_report(study, tuning)
-    chassis = tuning.identity()['chassis']
+    chassis = tuning.identity()
     write_tuned_params(out, report, chassis)
     plot_history(study, history)
     written = [out, history]
