@@ -150,7 +150,8 @@ def test_the_layer_test_catches_an_upward_import(tmp_path):
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'python3-yaml',
                'matplotlib': 'python3-matplotlib', 'PIL': 'python3-pil',
                'pybullet': 'python3-pybullet-pip', 'pybullet_utils': 'python3-pybullet-pip',
-               'mcap': 'python3-mcap-pip', 'zstandard': 'python3-zstandard'}
+               'mcap': 'python3-mcap-pip', 'zstandard': 'python3-zstandard',
+               'optuna': 'python3-optuna-pip', 'sqlalchemy': 'python3-sqlalchemy'}
 
 
 def test_package_xml_lists_every_dependency_the_code_may_import():

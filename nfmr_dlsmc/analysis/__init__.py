@@ -1,5 +1,6 @@
 """
-Studies over many runs: comparison scenarios, metrics, report, figures, gain search.
+Studies over many runs: comparison scenarios, metrics, report, figures, gain searches.
 
-May import every layer below ROS (core, baselines, plants, runtime, bag) and matplotlib.
+May import every layer below ROS (core, baselines, plants, runtime, bag), matplotlib and
+optuna (the chassis study, doc/design.md D19, with its storage's sqlalchemy).
 """
