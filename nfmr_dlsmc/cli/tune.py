@@ -55,9 +55,11 @@ from nfmr_dlsmc.runtime.share import shipped_config
 #: given, which --plant pybullet requires).
 KINEMATIC_DEFAULTS = {'candidates': 300, 'finalists': 8, 'screen_starts': 60, 'n': 500,
                       'ratio': 'fixed'}
-#: The chassis study's own options (None: not given, which the kinematic search requires).
-PYBULLET_OPTIONS = ('sensing', 'trials', 'timeout', 'storage', 'study', 'range', 'starts',
-                    'hold_from', 'prune_distance')
+#: The chassis study's own options and their defaults (None on the command line: not given,
+#: which the kinematic search requires; None here: none, or decided from other options).
+PYBULLET_DEFAULTS = {'sensing': None, 'trials': 100, 'timeout': None, 'storage': None,
+                     'study': None, 'range': (), 'starts': 1, 'hold_from': 15.0,
+                     'prune_distance': 0.05}
 #: Per plant: the default --out, --duration [s] and --x0-range (dx [m], dy [m], dth [rad]).
 PLANT_DEFAULTS = {
     'kinematic': {'out': 'tuned_outer.yaml', 'duration': 100.0,
@@ -153,17 +155,15 @@ def _run(args) -> int:
     for key, value in PLANT_DEFAULTS[args.plant].items():
         if getattr(args, key) is None:
             setattr(args, key, Path(value) if key == 'out' else value)
-    mine, others = ((KINEMATIC_DEFAULTS, PYBULLET_OPTIONS) if args.plant == 'kinematic'
-                    else (PYBULLET_OPTIONS, KINEMATIC_DEFAULTS))
+    mine, others = ((KINEMATIC_DEFAULTS, PYBULLET_DEFAULTS) if args.plant == 'kinematic'
+                    else (PYBULLET_DEFAULTS, KINEMATIC_DEFAULTS))
     for dest in others:
         if getattr(args, dest) is not None:
             raise UsageError(f'{_option_name(dest)} does not apply to --plant {args.plant}')
-    if args.plant == 'kinematic':
-        for dest, default in mine.items():
-            if getattr(args, dest) is None:
-                setattr(args, dest, default)
-        return _tune_kinematic(args)
-    return _tune_on_chassis(args)
+    for dest, default in mine.items():
+        if getattr(args, dest) is None:
+            setattr(args, dest, default)
+    return (_tune_kinematic if args.plant == 'kinematic' else _tune_on_chassis)(args)
 
 
 def _tune_kinematic(args) -> int:
@@ -183,13 +183,11 @@ def _tune_kinematic(args) -> int:
 
 
 def _tune_on_chassis(args) -> int:
-    space = search_space(parse_range(text) for text in args.range or ())
+    space = search_space(parse_range(text) for text in args.range)
     setup = TuningSetup(
         Path(args.params) if args.params else shipped_config('robot_case1.yaml'),
-        args.sensing, space,
-        make_scenarios(1 if args.starts is None else args.starts, args.x0_range, args.seed),
-        args.duration, 15.0 if args.hold_from is None else args.hold_from,
-        0.05 if args.prune_distance is None else args.prune_distance)
+        args.sensing, space, make_scenarios(args.starts, args.x0_range, args.seed),
+        args.duration, args.hold_from, args.prune_distance)
     tuning = load_tuning(setup)
     out = args.out
     history = out.with_name(f'{out.stem}_history.png')
@@ -199,9 +197,8 @@ def _tune_on_chassis(args) -> int:
     url = args.storage or f"sqlite:///{out.parent.resolve() / 'study.db'}"
     name = args.study or out.stem
     study = open_study(url, name, tuning, args.force)
-    trials = 100 if args.trials is None else args.trials
     try:
-        run_study(setup, url, name, trials, args.timeout, args.seed, args.jobs,
+        run_study(setup, url, name, args.trials, args.timeout, args.seed, args.jobs,
                   lambda text: print(text, file=sys.stderr, flush=True))
     except KeyboardInterrupt:
         print(f'\nnfmr-tune: study {name} in {url} keeps its finished trials; the same '
