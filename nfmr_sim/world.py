@@ -1,9 +1,12 @@
 """The pybullet world of the 4WIS chassis (no ROS): build, command, step, observe."""
 
 import collections
+import contextlib
 from dataclasses import dataclass, replace
 import math
+import os
 from pathlib import Path
+import sys
 import tempfile
 
 from nfmr_dlsmc.core.steering import WHEEL_NAMES
@@ -15,6 +18,24 @@ from pybullet_utils.bullet_client import BulletClient
 
 STEER_JOINTS = tuple(f'{w}_steer' for w in WHEEL_NAMES)
 DRIVE_JOINTS = tuple(f'{w}_drive' for w in WHEEL_NAMES)
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr():
+    """
+    Send what is written to file descriptor 1 to descriptor 2 for the duration.
+
+    pybullet's C library prints ``argv[0]=`` on standard output when it connects, which
+    would break a command's ``--json`` output; its other banner goes to standard error.
+    """
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 @dataclass(frozen=True)
@@ -111,7 +132,9 @@ class ChassisWorld:
     def __init__(self, config: WorldConfig | None = None, gui: bool = False):
         config = WorldConfig() if config is None else config
         self.config = config
-        self._client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        with _stdout_to_stderr():
+            self._client = BulletClient(
+                connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self._client
         c.setGravity(0.0, 0.0, -9.81)
         c.setTimeStep(config.physics_dt)
