@@ -12,11 +12,10 @@ import argparse
 import math
 import os
 from pathlib import Path
-import signal
 import sys
 import tempfile
 
-from nfmr_dlsmc.cli.entry import interrupt, INTERRUPTED_STATUS
+from nfmr_dlsmc.cli.entry import INTERRUPTED_STATUS, take_signals
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
@@ -62,8 +61,7 @@ def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
         (``| head``), 130 on Ctrl-C, SIGTERM or SIGHUP (one line).
 
     """
-    for signum in (signal.SIGTERM, signal.SIGHUP):  # a closed terminal ends a run as kill does
-        signal.signal(signum, interrupt)
+    take_signals()
     try:
         return body(parser.parse_args(argv))
     except BrokenPipeError:

@@ -21,11 +21,16 @@ def interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
+def take_signals() -> None:
+    """Take SIGTERM and SIGHUP as Ctrl-C: a closed terminal ends a command as kill does."""
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, interrupt)
+
+
 def _command(module: str, prog: str):
     """Return the entry point that runs ``nfmr_dlsmc.cli.<module>.main``."""
     def main() -> int:
-        for signum in (signal.SIGTERM, signal.SIGHUP):
-            signal.signal(signum, interrupt)
+        take_signals()
         try:
             command = importlib.import_module(f'nfmr_dlsmc.cli.{module}')
         except KeyboardInterrupt:

@@ -57,21 +57,20 @@ def _double(text: str):
     """Return ``strtod(text)`` if it reads ``text`` whole without a range error, else None."""
     if _SPECIAL.fullmatch(text):
         return float(text.replace('.', ''))
-    if _DECIMAL.fullmatch(text):
+    if match := _DECIMAL.fullmatch(text):
         value = float(text)
-        mantissa = _DECIMAL.fullmatch(text).group(1)
-    elif _HEX_FLOAT.fullmatch(text):
+    elif match := _HEX_FLOAT.fullmatch(text):
         sign = -1.0 if text[0] == '-' else 1.0
         body = text.lstrip('+-')
         try:
             value = sign * float.fromhex(body if 'p' in body.lower() else body + 'p0')
         except OverflowError:
             return None
-        mantissa = _HEX_FLOAT.fullmatch(text).group(1)
     else:
         return None
     if math.isinf(value):  # overflow (ERANGE)
         return None
+    mantissa = match.group(1)
     underflow = (value == 0.0 and mantissa.strip('0.') != '') or (
         0.0 < abs(value) < 2.2250738585072014e-308)
     return None if underflow else value
