@@ -2,13 +2,15 @@
 The pose of P at the control tick from late, slow and noisy odometry (doc/design.md, D11).
 
 An extended Kalman filter on the unicycle model of eq. (3), with the commanded (v, omega) as
-its input. Between odometry messages it predicts the pose at each control tick from the
-commands of the ticks since; a message is fused at its stamp — the instant its pose was
-true — and the ticks after it are predicted again from there, so latency is compensated,
-not only tolerated. Messages older than the last one (out of order) are fused at their
-stamp too; messages older than the kept history are counted and dropped.
+its input and, optionally, the chassis's slowly varying departure from that command (a speed
+bias and a yaw-rate bias, random walks) as two more states. Between odometry messages it
+predicts the pose at each control tick from the commands of the ticks since; a message is
+fused at its stamp — the instant its pose was true — and the ticks after it are predicted
+again from there, so latency is compensated, not only tolerated. Messages older than the
+last one (out of order) are fused at their stamp too; messages older than the kept history
+are counted and dropped.
 
-Plain numpy, no filter library: a 3-state EKF with an identity measurement is a dozen
+Plain numpy, no filter library: a 5-state EKF whose measurement is the pose is a dozen
 lines, and the delayed-measurement replay below needs the filter's state at every tick,
 which filter libraries do not keep for us.
 """
@@ -30,8 +32,10 @@ import numpy as np
 
 __all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR']
 
+#: The state: x [m], y [m], theta [rad], speed bias [m/s], yaw-rate bias [rad/s].
+_N = 5
 #: The state (x, P) of an estimate that overflowed (a prediction over an absurd time).
-_OVERFLOWED = (np.full(3, math.nan), np.full((3, 3), math.nan))
+_OVERFLOWED = (np.full(_N, math.nan), np.full((_N, _N), math.nan))
 #: Least standard deviation [m, rad] a message's covariance is taken to say: exact odometry
 #: (a zero covariance) is trusted to a micrometre and a microradian.
 SIGMA_FLOOR = 1e-6
@@ -65,6 +69,15 @@ class EstimatorConfig:
                                  'motion; process noise', POSITIVE)
     yaw_walk: float = param(0.01, 'rad/sqrt(s)', 'random walk of the yaw against the '
                             'commanded yaw rate; process noise', POSITIVE)
+    speed_bias_walk: float = param(0.0, 'm/s/sqrt(s)', 'random walk of the chassis speed '
+                                   "against the commanded v (wheel slip, the drives' lag): "
+                                   'estimated as a state, so that a speed the chassis keeps '
+                                   'missing by a few mm/s does not leave the estimate behind '
+                                   '(0: the commanded v is taken as it is)', NON_NEGATIVE)
+    yaw_rate_bias_walk: float = param(0.0, 'rad/s/sqrt(s)', 'random walk of the yaw rate '
+                                      'against the commanded omega, estimated as a state '
+                                      '(0: the commanded omega is taken as it is)',
+                                      NON_NEGATIVE)
     history: float = param(0.5, 's', 'how old an odometry message may be and still be fused '
                            'at its stamp', POSITIVE)
     innovation_gate: float = param(0.0, '', "bound on a message's normalised innovation "
@@ -91,6 +104,10 @@ class PoseEstimator:
     """
     EKF of (x [m], y [m], theta [rad]) of P driven by the commands, fed by odometry.
 
+    Two more states, the speed bias b_v [m/s] and the yaw-rate bias b_omega [rad/s], are what
+    the chassis adds to the commanded (v, omega); they stay zero unless
+    ``speed_bias_walk`` / ``yaw_rate_bias_walk`` let them move.
+
     Call per control tick: :meth:`pose` at the tick's time, then :meth:`command` with what
     the law commanded; call :meth:`measure` for each odometry message, whenever it arrives.
 
@@ -109,6 +126,19 @@ class PoseEstimator:
         self.config = config
         self.reset()
 
+    @property
+    def config(self) -> EstimatorConfig:
+        """Return the settings; new ones (a live parameter change) apply from the next tick."""
+        return self._config
+
+    @config.setter
+    def config(self, config: EstimatorConfig) -> None:
+        self._config = config
+        #: Process noise per second: the position and yaw walks, the biases' walks.
+        self._q = np.diag([config.position_walk ** 2, config.position_walk ** 2,
+                           config.yaw_walk ** 2, config.speed_bias_walk ** 2,
+                           config.yaw_rate_bias_walk ** 2])
+
     def reset(self) -> None:
         """Forget everything: no pose until the next odometry message."""
         self._ticks = []  # _Tick, oldest first; the last is the latest tick
@@ -125,43 +155,51 @@ class PoseEstimator:
     # -- the filter ----------------------------------------------------------------------
 
     def _propagate(self, x, P, u, dt):
-        """Predict over ``dt`` [s] with input u = (v, omega): eq. (3), forward Euler."""
+        """
+        Predict over ``dt`` [s] with input u = (v, omega): eq. (3), forward Euler.
+
+        x' = x + (v + b_v) cos(theta) dt, y' = y + (v + b_v) sin(theta) dt,
+        theta' = theta + (omega + b_omega) dt; the biases walk.
+        """
         if dt <= 0.0:
             return x, P
         if not (math.isfinite(x[2]) and math.isfinite(dt)):
             return _OVERFLOWED  # stays so: pose() reports it and the caller resets
-        v, w = u
+        v, w = u[0] + x[3], u[1] + x[4]
         c, s = math.cos(x[2]), math.sin(x[2])
-        x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt])
-        F = np.array([[1.0, 0.0, -v * s * dt], [0.0, 1.0, v * c * dt], [0.0, 0.0, 1.0]])
-        qp, qw = self.config.position_walk ** 2 * dt, self.config.yaw_walk ** 2 * dt
-        return x, F @ P @ F.T + np.diag([qp, qp, qw])
+        x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt, x[3], x[4]])
+        F = np.eye(_N)
+        F[0, 2], F[1, 2] = -v * s * dt, v * c * dt
+        F[0, 3], F[1, 3], F[2, 4] = c * dt, s * dt, dt
+        return x, F @ P @ F.T + self._q * dt
 
     def _update(self, x, P, measured):
         """
-        Fuse a measured pose z with covariance R: it measures the state itself (H = I).
+        Fuse a measured pose z with covariance R: it measures the first three states.
 
         With ``innovation_gate`` g > 0, an innovation nu whose normalised square
-        d = nu^T S^-1 nu (S = P + R) exceeds g first widens the prior to
-        P' = (d / g) S - R (positive semi-definite, since d / g > 1), so that S' = (d / g) S
-        and nu^T S'^-1 nu = g: an adaptive fading memory, the update trusting the message
-        more the less the model explains it.
+        d = nu^T S^-1 nu (S = P_pose + R) exceeds g first widens the pose block of the prior
+        to P_pose' = (d / g) S - R (P grows by a positive semi-definite matrix, since
+        d / g > 1), so that S' = (d / g) S and nu^T S'^-1 nu = g: an adaptive fading memory,
+        the update trusting the message more the less the model explains it. The biases'
+        covariance is left as it is: a push moves the pose, not the chassis's speed error.
         """
         z, R = measured
         yaw_error = z[2] - x[2]
         if not math.isfinite(yaw_error):
             return _OVERFLOWED
         innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(yaw_error, math.tau)])
-        S = P + R
+        S = P[:3, :3] + R
         S_inv = np.linalg.inv(S)
         gate = self.config.innovation_gate
         if gate > 0.0:
             d = float(innovation @ S_inv @ innovation)
             if d > gate:
-                P = (d / gate) * S - R
+                P = P.copy()
+                P[:3, :3] = (d / gate) * S - R
                 S_inv *= gate / d
-        K = P @ S_inv
-        return x + K @ innovation, (np.eye(3) - K) @ P
+        K = P[:, :3] @ S_inv
+        return x + K @ innovation, P - K @ P[:3, :]
 
     def _fuse(self, tick: _Tick, until: float):
         """Return (t, x, P): from tick's prior, the messages stamped in [tick.t, until) fused."""
@@ -225,7 +263,9 @@ class PoseEstimator:
                 return None
             # The first message starts the estimate at its stamp, at rest until commanded.
             z, R = self._poses[0]
-            first = _Tick(self._stamps[0], np.array(z), R, (0.0, 0.0))
+            P0 = np.zeros((_N, _N))
+            P0[:3, :3] = R
+            first = _Tick(self._stamps[0], np.array([*z, 0.0, 0.0]), P0, (0.0, 0.0))
             del self._stamps[0], self._poses[0]
             self._ticks.append(first)
             self._post = self._fuse(first, math.nextafter(first.t, math.inf))
@@ -245,6 +285,14 @@ class PoseEstimator:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
             return math.nan, math.nan, math.nan  # overflowed: no estimate to use
         return float(x[0]), float(x[1]), float(x[2])
+
+    @property
+    def bias(self) -> tuple[float, float]:
+        """Return the estimated (speed [m/s], yaw-rate [rad/s]) the chassis adds to commands."""
+        if self._post is None:
+            return 0.0, 0.0
+        x = self._post[1]
+        return float(x[3]), float(x[4])
 
     def command(self, v: float, omega: float) -> None:
         """Record the command of the latest tick: it drives the prediction from there."""
