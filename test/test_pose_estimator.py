@@ -66,8 +66,15 @@ def test_nothing_before_the_first_message():
     assert estimator.pose(0.005) == pytest.approx((1.0, 2.0, 0.5))
 
 
-def test_exact_odometry_of_every_tick_passes_through():
-    est, odom, _ = drive(PoseEstimator(EstimatorConfig(enabled=True)), 2.0, 1000.0, 0.0)
+@pytest.mark.parametrize('walks', [
+    {},  # the defaults
+    # the robot profile's: small walks, the chassis's speed and yaw-rate errors learnt
+    {'position_walk': 3e-5, 'yaw_walk': 3e-5, 'speed_bias_walk': 0.003,
+     'yaw_rate_bias_walk': 3e-4},
+], ids=['default', 'robot-profile'])
+def test_exact_odometry_of_every_tick_passes_through(walks):
+    config = EstimatorConfig(enabled=True, **walks)
+    est, odom, _ = drive(PoseEstimator(config), 2.0, 1000.0, 0.0, slip=0.01)
     np.testing.assert_allclose(est, odom, atol=1e-8)
 
 

@@ -37,8 +37,9 @@ _N = 5
 #: The state (x, P) of an estimate that overflowed (a prediction over an absurd time).
 _OVERFLOWED = (np.full(_N, math.nan), np.full((_N, _N), math.nan))
 #: Least standard deviation [m, rad] a message's covariance is taken to say: exact odometry
-#: (a zero covariance) is trusted to a micrometre and a microradian.
-SIGMA_FLOOR = 1e-6
+#: (a zero covariance) is trusted to a nanometre and a nanoradian, far below the process noise
+#: of one tick, so that it passes through as it is.
+SIGMA_FLOOR = 1e-9
 
 
 @documented
