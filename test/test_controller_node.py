@@ -258,6 +258,44 @@ def test_clock_mode_ticks_at_the_control_rate(setup):
     assert ticks <= 1.1 * 1000.0 * elapsed + 50  # 1 kHz, plus a burst delivered at once
 
 
+def clock_until_seen(node, clock, t):
+    """Publish /clock at t [s] on ``clock`` until the clock of ``node`` shows it."""
+    msg = Clock()
+    msg.clock.sec, msg.clock.nanosec = int(t), int(round((t - int(t)) * 1e9))
+    ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+    wait_for(lambda: clock.publish(msg) or node.get_clock().now().nanoseconds == ns,
+             what=f'/clock at {t} s')
+
+
+def test_clock_mode_on_simulated_time_steps_once_a_period_of_clock_has_passed(setup):
+    # As nfmr-run --mode realtime runs it: the steps follow /clock, none made up when late.
+    node, peer = setup(tick_source='clock', use_sim_time=True)
+    clock = peer.create_publisher(Clock, '/clock', QOS)
+    wait_for(lambda: clock.get_subscription_count() >= 1, what="the node's /clock")
+    control_time = STATE_LABELS.index('control_time')
+
+    def at(t):
+        clock_until_seen(node, clock, t)
+
+    def stepped_at():
+        return [m.data[control_time] for _, m in peer.states]
+
+    t = 10.0
+    peer.send_odom(1.0, 4.0, 0.0, t)
+    while not peer.states:  # a period at a time until the odometry is in (no pose, no step)
+        t = round(t + 0.001, 6)
+        at(t)
+    wait_for(lambda: stepped_at()[-1] >= t - 1e-9, what=f'the step at {t} s')
+    for dt in (0.0005, 0.001, 0.0015, 0.002, 0.009):
+        at(round(t + dt, 6))
+    wait_for(lambda: stepped_at()[-1] >= t + 0.009 - 1e-9, what='the step 9 ms later')
+    # One step a period (half periods make none), and a jump of 7 ms makes one, not seven.
+    assert [v for v in stepped_at() if v > t + 1e-9] == pytest.approx(
+        [t + 0.001, t + 0.002, t + 0.009], abs=1e-9)
+    at(5.0)  # time went back (a sim reset): the steps start again from there
+    wait_for(lambda: stepped_at()[-1] == pytest.approx(5.0, abs=1e-9), what='the step at 5 s')
+
+
 def test_with_sim_clock_odometry_ages_on_simulated_time(setup):
     # In lockstep a busy machine stretches the wall between steps; only simulated time
     # passing without odometry makes it stale.
@@ -462,3 +500,16 @@ def test_a_clock_loop_beside_odometry_at_another_pace_says_so_once(setup, log):
     (line,) = [m for m in log.lines if 'odometry time runs at' in m]
     ratio = float(line.split('odometry time runs at ')[1].split('x')[0])
     assert 0.2 < ratio < 0.45 and 'use tick_source odom or sim_clock' in line
+
+
+def test_on_simulated_time_odometry_late_in_a_busy_executor_is_no_other_pace(setup, log):
+    # nfmr-run --mode realtime: the node's clock is the sim's; odometry that reaches it late
+    # (here its stamps advance at a third of /clock) is no sim at another pace.
+    node, peer = setup(tick_source='clock', use_sim_time=True)
+    clock = peer.create_publisher(Clock, '/clock', QOS)
+    wait_for(lambda: clock.get_subscription_count() >= 1, what="the node's /clock")
+    for k in range(1, 601):  # 6 s of simulated time: three of the watch's 2 s windows
+        peer.send_odom(1.0, 4.0, 0.0, k * 0.01 / 3.0)
+        clock_until_seen(node, clock, 10.0 + k * 0.01)
+    wait_for(lambda: len(peer.states) > 100, what='steps on simulated time')
+    assert not any('odometry time runs at' in line for line in log.read())
