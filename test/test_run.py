@@ -1,5 +1,6 @@
 """nfmr-run end to end: two node processes, real DDS, a recorded bag read three ways."""
 
+import json
 import math
 from pathlib import Path
 import re
@@ -390,6 +391,12 @@ def test_the_end_says_how_the_run_kept_its_timing(short_run):
     rate = float(re.search(r'controller loop ([0-9.]+) Hz', line).group(1))
     assert rate == pytest.approx(1000.0, rel=1e-3)
     assert ', 0 overruns' in line and 'sim braked 0 times' in line
+    # The same in the run folder, for scripts (nfmr-bench reads it).
+    timing = json.loads((Path(stdout.strip().splitlines()[-1]).parent
+                         / 'timing.json').read_text())
+    assert timing['sim_real_time_factor'] == pytest.approx(rtf, abs=0.005)
+    assert timing['controller_loop']['rate_hz'] == pytest.approx(rate, abs=0.05)
+    assert timing['controller_loop']['overruns'] == 0 and timing['sim_braked'] == 0
 
 
 def test_a_path_file_is_followed_from_its_start_and_the_run_says_how_it_ended(tmp_path):

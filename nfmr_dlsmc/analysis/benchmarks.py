@@ -157,4 +157,18 @@ def _node_rows(nodes: dict) -> list[str]:
         f"{'bag writer [messages/s]':<{w}} {nodes['bag_writer']['messages_per_s']:>12,.0f}"]
     for name, mb in nodes['rss_mb'].items():
         lines.append(f"{'resident memory ' + name + ' [MB]':<{w}} {mb:>12.1f}")
+    if 'runs' not in nodes:
+        return lines
+    # Whole nfmr-run runs, against the bare world's real-time factor of the same bench.
+    lines += [
+        f"{'nfmr-run lockstep RTF, recorded [-]':<{w}} {nodes['lockstep_rtf']:>12.2f}  "
+        '>= 0.6 x the bare world',
+        f"{'nfmr-run lockstep RTF, not recorded [-]':<{w}} "
+        f"{nodes['lockstep_rtf_no_record']:>12.2f}",
+        f"{'nfmr-run realtime: sim RTF [-]':<{w}} {nodes['realtime_sim_rtf']:>12.3f}  >= 0.98",
+        f"{'nfmr-run realtime: loop period p99 [ms]':<{w}} "
+        f"{nodes['loop_period_p99_ms']:>12.3f}  <= 1.05 x the plain timer's "
+        f"({nodes['timer_period_p99_ms']:.3f})",
+        f"{'nfmr-run realtime: overruns > 2 ms per min':<{w}} "
+        f"{nodes['loop_overruns_per_min']:>12.1f}  <= 1"]
     return lines

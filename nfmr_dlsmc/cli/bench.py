@@ -4,7 +4,7 @@
 The measurements are :mod:`nfmr_dlsmc.analysis.benchmarks`' and, with ``--nodes``,
 :mod:`nfmr_dlsmc.ros.bench`'s (the controller node's 1 kHz loop against a plain rclpy
 1 ms timer, odometry -> command latency across processes, resident memory, bag writer
-throughput).
+throughput, and whole ``nfmr-run`` runs: lockstep recorded and not, realtime recorded).
 """
 
 import argparse
@@ -36,6 +36,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='also measure the running nodes (takes --seconds and more)')
     parser.add_argument('--seconds', type=float, default=60.0,
                         help='how long the node loops run with --nodes [s] (default 60)')
+    parser.add_argument('--run-seconds', type=float, default=20.0,
+                        help='simulated time of each whole nfmr-run with --nodes [s] '
+                             '(default 20)')
     return parser
 
 
@@ -62,11 +65,23 @@ def _run(args) -> int:
                         'all_cores': batch_robot_steps(4000, 5.0, jobs)}
     figures['nodes'] = None
     if args.nodes:
-        from nfmr_dlsmc.ros.bench import bag_writer_throughput, node_figures
+        from nfmr_dlsmc.ros.bench import (bag_writer_throughput, node_figures,
+                                          whole_run_figures)
         print(f'controller node loop, {args.seconds:g} s, and a plain rclpy timer ...',
               flush=True)
-        figures['nodes'] = node_figures(args.seconds)
-        figures['nodes']['bag_writer'] = bag_writer_throughput()
+        figures['nodes'] = nodes = node_figures(args.seconds)
+        nodes['bag_writer'] = bag_writer_throughput()
+        print(f'nfmr-run, {args.run_seconds:g} s each: lockstep recorded and not, realtime '
+              'recorded ...', flush=True)
+        nodes['runs'] = runs = whole_run_figures(args.run_seconds)
+        realtime_loop = runs['realtime']['controller_loop']
+        nodes.update(
+            lockstep_rtf=runs['lockstep']['sim_real_time_factor'],
+            lockstep_rtf_no_record=runs['lockstep_no_record']['sim_real_time_factor'],
+            realtime_sim_rtf=runs['realtime']['sim_real_time_factor'],
+            loop_period_p99_ms=realtime_loop['period_p99_ms'],
+            timer_period_p99_ms=nodes['plain_rclpy_timer']['period_p99_ms'],
+            loop_overruns_per_min=realtime_loop['overruns'] * 60.0 / args.run_seconds)
     print(benchmark_table(figures))
     if args.json:
         with open(args.json, 'w') as fh:

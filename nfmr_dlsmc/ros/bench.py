@@ -158,6 +158,40 @@ def node_figures(seconds: float) -> dict:
     return out
 
 
+#: The runs of :func:`whole_run_figures`: (name, nfmr-run options).
+WHOLE_RUNS = (('lockstep', ()), ('lockstep_no_record', ('--no-record',)),
+              ('realtime', ('--mode', 'realtime')))
+
+
+def whole_run_figures(seconds: float) -> dict:
+    """
+    Run ``nfmr-run`` (robot profile, Case 1, no comparison) as a user does, three times.
+
+    In lockstep with and without recording, and in real time with recording, each for
+    ``seconds`` of simulated time; return each run's ``timing.json`` by name
+    (:data:`WHOLE_RUNS`; :func:`~nfmr_dlsmc.ros.launcher.run_timing` says what it holds).
+
+    Raises
+    ------
+    RuntimeError
+        A run failed (its exit status and the end of what it printed).
+
+    """
+    out = {}
+    with tempfile.TemporaryDirectory(prefix='nfmr-bench-runs-') as tmp:
+        for name, options in WHOLE_RUNS:
+            runs = Path(tmp) / name
+            proc = subprocess.run([str(BIN / 'nfmr-run'), '--duration', f'{seconds:g}',
+                                   '--no-compare', '--out', str(runs), *options],
+                                  capture_output=True, text=True, timeout=600 + 10 * seconds)
+            if proc.returncode != 0:
+                raise RuntimeError(f'nfmr-run {name} exited {proc.returncode}: '
+                                   f'{proc.stderr.strip()[-500:]}')
+            (timing,) = runs.glob('*/timing.json')
+            out[name] = json.loads(timing.read_text())
+    return out
+
+
 def _numeric_values(status) -> dict:
     """Return the values of a DiagnosticStatus that are numbers, by key."""
     found = {}

@@ -12,6 +12,7 @@ plots. The last line printed is the bag directory. The command line is
 """
 
 from dataclasses import dataclass, replace
+import json
 import math
 import os
 from pathlib import Path
@@ -278,6 +279,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         stop.release()
     if writer is not None and status == 0:
         _report(bag_dir, run_dir, params, settings, options, writer.counts, real_time_factor)
+    elif status == 0:  # not recorded: the pace and the braking, without the loop's figures
+        report_timing(run_timing(real_time_factor, None, run_dir / 'sim.log'), run_dir)
     if writer is not None:
         print(bag_dir)
     return status
@@ -704,24 +707,42 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
-    print(_timing_line(real_time_factor, loop_figures(contents), run_dir / 'sim.log'))
+    report_timing(run_timing(real_time_factor, loop_figures(contents), run_dir / 'sim.log'),
+                  run_dir)
     if options.animate:
         _animate(bag_dir, run_dir / 'run.gif')
 
 
-def _timing_line(real_time_factor: float, loop: dict | None, sim_log: Path) -> str:
-    """Return the run's timing: the sim's pace, the controller's loop, the sim's braking."""
+def run_timing(real_time_factor: float, loop: dict | None, sim_log: Path) -> dict:
+    """
+    Return how a run kept its timing.
+
+    ``sim_real_time_factor`` [-], ``sim_behind_s`` (the wall time the realtime sim gave up,
+    from its log; 0 if none), ``controller_loop`` (``rate_hz``, ``period_p99_ms``,
+    ``overruns``, ``windows`` from the recorded ``/diagnostics``; None without a bag) and
+    ``sim_braked`` (how often the sim braked for want of a valid command).
+    """
     log = sim_log.read_text() if sim_log.is_file() else ''
     braking = sum(1 for line in log.splitlines()
                   if 'braking' in line and 'no command received yet' not in line)
     behind = re.findall(r'slower than real time: ([0-9.]+) s behind', log)
-    parts = [f'timing: sim {real_time_factor:.2f}x real time'
-             + (f' ({behind[-1]} s behind the wall clock)' if behind else '')]
+    return {'sim_real_time_factor': real_time_factor,
+            'sim_behind_s': float(behind[-1]) if behind else 0.0,
+            'controller_loop': loop, 'sim_braked': braking}
+
+
+def report_timing(timing: dict, run_dir: Path) -> None:
+    """Print the timing line and write it to ``timing.json`` in the run folder."""
+    parts = [f"timing: sim {timing['sim_real_time_factor']:.2f}x real time"
+             + (f" ({timing['sim_behind_s']:.3f} s behind the wall clock)"
+                if timing['sim_behind_s'] else '')]
+    loop = timing['controller_loop']
     if loop:
         parts.append(f"controller loop {loop['rate_hz']:.1f} Hz, period p99 "
                      f"{loop['period_p99_ms']:.2f} ms, {loop['overruns']:.0f} overruns")
-    parts.append(f'sim braked {braking} times for a missing or invalid command')
-    return '; '.join(parts)
+    parts.append(f"sim braked {timing['sim_braked']} times for a missing or invalid command")
+    print('; '.join(parts))
+    (run_dir / 'timing.json').write_text(json.dumps(timing, indent=2) + '\n')
 
 
 def _animate(bag_dir: Path, out: Path) -> None:
