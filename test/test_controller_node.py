@@ -502,6 +502,29 @@ def test_a_clock_loop_beside_odometry_at_another_pace_says_so_once(setup, log):
     assert 0.2 < ratio < 0.45 and 'use tick_source odom or sim_clock' in line
 
 
+def test_clock_mode_on_simulated_time_stops_when_odometry_stops(setup):
+    # nfmr-run --mode realtime: odometry that stops arriving while /clock runs on stops the
+    # robot once odom_timeout of simulated time has passed without it.
+    node, peer = setup(tick_source='clock', use_sim_time=True, odom_timeout=0.1)
+    clock = peer.create_publisher(Clock, '/clock', QOS)
+    wait_for(lambda: clock.get_subscription_count() >= 1, what="the node's /clock")
+    stopped, control_time = STATE_LABELS.index('stopped'), STATE_LABELS.index('control_time')
+    t = 20.0
+    peer.send_odom(1.0, 4.0, 0.0, t)
+    while not peer.states:  # until the odometry is in
+        t = round(t + 0.001, 6)
+        clock_until_seen(node, clock, t)
+    last_odometry = t
+    while not any(m.data[stopped] for _, m in peer.states):
+        assert t < last_odometry + 0.5, 'no stop within 0.5 s of simulated time'
+        t = round(t + 0.005, 6)
+        clock_until_seen(node, clock, t)
+    first_stop = next(m.data[control_time] for _, m in peer.states if m.data[stopped])
+    assert 0.1 < first_stop - 20.0 <= 0.1 + 0.01  # the odometry's age, past odom_timeout
+    wait_for(lambda: len(peer.twists) >= len(peer.states), what='the stop command')
+    assert peer.twists[-1][1].linear.x == 0.0
+
+
 def test_on_simulated_time_odometry_late_in_a_busy_executor_is_no_other_pace(setup, log):
     # nfmr-run --mode realtime: the node's clock is the sim's; odometry that reaches it late
     # (here its stamps advance at a third of /clock) is no sim at another pace.
