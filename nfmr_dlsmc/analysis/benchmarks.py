@@ -132,12 +132,12 @@ def benchmark_table(figures: dict) -> str:
                      '  >= 10,000,000')
     nodes = figures['nodes']
     if nodes:
-        lines += _node_rows(nodes)
+        lines += _node_rows(nodes, world['real_time_factor'])
     return '\n'.join(lines)
 
 
-def _node_rows(nodes: dict) -> list[str]:
-    """Return the rows of the running nodes' figures."""
+def _node_rows(nodes: dict, world_rtf: float) -> list[str]:
+    """Return the rows of the running nodes' figures (``world_rtf``: the bare world's)."""
     w = _LABEL_WIDTH
     loop, plain = nodes['controller_loop'], nodes['plain_rclpy_timer']
     lat = nodes['odom_to_command_latency']
@@ -162,7 +162,7 @@ def _node_rows(nodes: dict) -> list[str]:
     # Whole nfmr-run runs, against the bare world's real-time factor of the same bench.
     lines += [
         f"{'nfmr-run lockstep RTF, recorded [-]':<{w}} {nodes['lockstep_rtf']:>12.2f}  "
-        '>= 0.6 x the bare world',
+        f">= 0.6 x the bare world ({nodes['lockstep_rtf'] / world_rtf:.2f} x)",
         f"{'nfmr-run lockstep RTF, not recorded [-]':<{w}} "
         f"{nodes['lockstep_rtf_no_record']:>12.2f}",
         f"{'nfmr-run realtime: sim RTF [-]':<{w}} {nodes['realtime_sim_rtf']:>12.3f}  >= 0.98",
