@@ -81,6 +81,13 @@ class EstimatorConfig:
                                       NON_NEGATIVE)
     history: float = param(0.5, 's', 'how old an odometry message may be and still be fused '
                            'at its stamp', POSITIVE)
+    correction_smoothing: float = param(0.0, 's', 'time constant with which the position '
+                                        'handed to the law takes up the correction of a '
+                                        'message: it goes on with the commanded motion and is '
+                                        'drawn to the estimate at this rate instead of '
+                                        'stepping at each message (D21; exact odometry is '
+                                        'never smoothed; 0: the estimate itself)',
+                                        NON_NEGATIVE)
     innovation_gate: float = param(0.0, '', "bound on a message's normalised innovation "
                                    'squared (chi-square, 3 degrees of freedom; 16.3: one '
                                    'message in a thousand of pure noise): a message beyond it '
@@ -146,6 +153,8 @@ class PoseEstimator:
         self._stamps = []  # stamps [s] of the messages within the history, sorted
         self._poses = []  # their (measured pose, its covariance), in the same order
         self._post = None  # (t, x, P): the estimate at the latest tick, its messages fused
+        self._output = None  # (t, x, y): the position pose() returned at the latest tick
+        self._exact = False  # the latest message fused was exact (no correction to smooth)
         self.fused = self.out_of_order = self.too_old = 0
 
     @property
@@ -240,6 +249,7 @@ class PoseEstimator:
             position_sigma, yaw_sigma = self.config.position_noise, self.config.yaw_noise
         else:
             position_sigma, yaw_sigma = (max(float(v), SIGMA_FLOOR) for v in sigma)
+        self._exact = position_sigma <= SIGMA_FLOOR
         k = bisect_right(self._stamps, stamp)
         self._stamps.insert(k, stamp)
         self._poses.insert(k, ((float(x), float(y), float(theta)),
@@ -285,7 +295,32 @@ class PoseEstimator:
         _, x, P = self._post
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
             return math.nan, math.nan, math.nan  # overflowed: no estimate to use
+        if self.config.correction_smoothing > 0.0 and not self._exact:
+            return (*self._smoothed_position(t, x, previous.u), float(x[2]))
+        self._output = (t, float(x[0]), float(x[1]))
         return float(x[0]), float(x[1]), float(x[2])
+
+    def _smoothed_position(self, t: float, x: np.ndarray, u: tuple) -> tuple[float, float]:
+        """
+        Return the position handed to the law at ``t``: the estimate's with its steps smoothed.
+
+        The position returned at the previous tick, p, is carried on to ``t`` as the filter
+        predicts (eq. (3) with the previous tick's command, the estimated speed bias and the
+        estimated yaw), then drawn to the estimate e: p(t) = p^- + (1 - exp(-dt / tau))
+        (e - p^-), tau = ``correction_smoothing``. Between messages p moves as e does; the
+        step a message makes in e reaches p over tau.
+        """
+        if self._output is None or t < self._output[0]:
+            self._output = (t, float(x[0]), float(x[1]))
+        t0, px, py = self._output
+        dt = t - t0
+        if dt > 0.0:
+            step = (u[0] + x[3]) * dt
+            px, py = px + step * math.cos(x[2]), py + step * math.sin(x[2])
+            gain = -math.expm1(-dt / self.config.correction_smoothing)
+            px, py = px + gain * (x[0] - px), py + gain * (x[1] - py)
+            self._output = (t, px, py)
+        return px, py
 
     @property
     def bias(self) -> tuple[float, float]:
