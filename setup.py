@@ -27,6 +27,8 @@ setup(
         # storage (SQLAlchemy, whose errors name a storage that cannot be opened).
         'optuna>=5,<6',
         'sqlalchemy>=2,<3',
+        # --scheduler: the sweeps on a Dask distributed cluster (doc/design.md, D22).
+        'distributed>=2026.8,<2027',
         'ros-jazzy-rclpy>=7.1,<8',
         'ros-jazzy-common-interfaces>=5.3,<6',
         'ros-jazzy-rmw-fastrtps-cpp>=8.4,<9',

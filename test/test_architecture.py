@@ -29,7 +29,7 @@ THIRD_PARTY = {
     'core': {'numpy', 'scipy'},
     'baselines': {'numpy', 'yaml'},
     'plants': {'numpy', 'scipy'},
-    'runtime': {'numpy', 'yaml', 'ament_index_python'},
+    'runtime': {'numpy', 'yaml', 'ament_index_python', 'distributed'},
     'bag': {'numpy', 'yaml', 'mcap', 'zstandard'},
     'analysis': {'numpy', 'yaml', 'matplotlib', 'PIL', 'optuna', 'sqlalchemy'},
     'ros': {'numpy', 'yaml', 'matplotlib', 'rclpy', 'builtin_interfaces', 'geometry_msgs',
@@ -151,7 +151,8 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'pyth
                'matplotlib': 'python3-matplotlib', 'PIL': 'python3-pil',
                'pybullet': 'python3-pybullet-pip', 'pybullet_utils': 'python3-pybullet-pip',
                'mcap': 'python3-mcap-pip', 'zstandard': 'python3-zstandard',
-               'optuna': 'python3-optuna-pip', 'sqlalchemy': 'python3-sqlalchemy'}
+               'optuna': 'python3-optuna-pip', 'sqlalchemy': 'python3-sqlalchemy',
+               'distributed': 'python3-distributed'}
 
 
 def test_package_xml_lists_every_dependency_the_code_may_import():

@@ -22,6 +22,7 @@ for (:meth:`Tuning.identity`): the chassis, the odometry, the scenarios and the 
 continuing it for another is refused unless forced.
 """
 
+from concurrent.futures import wait
 from dataclasses import asdict, dataclass, field, replace
 import json
 import math
@@ -38,7 +39,7 @@ from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
-from nfmr_dlsmc.runtime.worker_pool import worker_pool
+from nfmr_dlsmc.runtime.worker_pool import Cluster, worker_pool
 import numpy as np
 import optuna
 from optuna.trial import TrialState
@@ -75,6 +76,8 @@ RUNAWAY_MARGIN = 3.0
 #: A running trial that has not written a heartbeat for twice this is failed by the next
 #: process working on the study (a crashed or killed process) [s].
 HEARTBEAT_INTERVAL = 30
+#: How often a study on a Dask cluster says here how many trials have finished [s].
+CLUSTER_REPORT_PERIOD = 30.0
 
 
 class StudyError(NfmrError):
@@ -519,7 +522,7 @@ def _log_to_stderr(text: str) -> None:
 
 
 def run_study(setup: TuningSetup, url: str, name: str, trials: int, timeout, seed: int,
-              jobs: int, log) -> None:
+              jobs, log) -> None:
     """
     Work on the study ``name`` at ``url`` (opened by :func:`open_study`) in ``jobs`` processes.
 
@@ -537,15 +540,20 @@ def run_study(setup: TuningSetup, url: str, name: str, trials: int, timeout, see
     seed : int
         Of the sampler; each process draws with ``seed`` + the trials in the study when it
         starts + its index, so that a resumed study does not draw its first values again.
-    jobs : int
-        Processes working on the study (1: this one).
+    jobs : int or Cluster
+        Processes working on the study (1: this one), or a Dask cluster: one worker per
+        thread of it, each reaching the storage at ``url`` (a database, or a file every
+        worker's machine sees at that path); their progress lines are the workers', and
+        here one line every 30 s says how many trials have finished.
     log : callable
         ``log(text)``: one line after each trial.
 
     """
     study = optuna.load_study(study_name=name, storage=_storage(url))
     base = seed + len(study.trials)
-    if jobs == 1:
+    cluster = isinstance(jobs, Cluster)
+    processes = jobs.jobs if cluster else jobs
+    if processes == 1 and not cluster:
         _optimize(setup, url, name, trials, timeout, base, 1, log)
         return
     # The enqueued trials here first: SQLite cannot lock the row of a waiting trial, and
@@ -557,10 +565,14 @@ def run_study(setup: TuningSetup, url: str, name: str, trials: int, timeout, see
         if timeout is not None:
             timeout = max(timeout - (time.monotonic() - begin), 1e-3)
     with worker_pool(jobs, quiet=True) as pool:
-        futures = [pool.submit(_work, setup, url, name, trials, timeout, base + 1000 * i, jobs)
-                   for i in range(jobs)]
-        for future in futures:
-            future.result()
+        pending = {pool.submit(_work, setup, url, name, trials, timeout, base + 1000 * i,
+                               processes) for i in range(processes)}
+        while pending:
+            done, pending = wait(pending, timeout=CLUSTER_REPORT_PERIOD)
+            for future in done:
+                future.result()
+            if cluster and pending:
+                log(f'{_finished(study)}/{trials} trials finished on {jobs.address}')
 
 
 def _work(setup, url, name, trials, timeout, seed, jobs) -> None:

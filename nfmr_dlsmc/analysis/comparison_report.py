@@ -423,7 +423,7 @@ def _robot_section(document: dict) -> list[str]:
     return lines
 
 
-def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, jobs: int,
+def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, where: str,
                   duration: float) -> str:
     setting = (
         'reproduced with the kinematic model (3): paper sine x_d = 0.5 t, y_d = sin(0.5 x_d), '
@@ -442,7 +442,7 @@ def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, jobs:
             f"Gains: `{gains_path}` (DLSMC: the paper's gains; DLSMC, robot profile: the "
             "paper's gains with the five robot options of `config/robot_case1.yaml`; the "
             'others tuned on the kinematic model with the same budget, recorded in that '
-            f'file). {runs} runs on {jobs} processes in {seconds:.1f} s (`nfmr-compare`).')
+            f'file). {runs} runs on {where} in {seconds:.1f} s (`nfmr-compare`).')
 
 
 def _sensing_note(sensing: str) -> list[str]:
@@ -460,10 +460,10 @@ def _sensing_note(sensing: str) -> list[str]:
 
 
 def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
-                 seconds: float, runs: int, jobs: int, notes: str = '',
+                 seconds: float, runs: int, where: str, notes: str = '',
                  duration: float = CASE1_LONGITUDINAL.duration) -> None:
     """
-    Write ``report.md`` of runs of ``duration`` [s].
+    Write ``report.md`` of runs of ``duration`` [s], run on ``where`` ("2 processes").
 
     The plant is ``document["plant"]`` (kinematic if absent).
     """
@@ -480,7 +480,7 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         + ('' if document.get('sensing', 'ideal') == 'ideal' else
            f", {document['sensing']} odometry"),
         '',
-        _introduction(plant, gains_path, seconds, runs, jobs, duration),
+        _introduction(plant, gains_path, seconds, runs, where, duration),
         '',
         *_sensing_note(document.get('sensing', 'ideal')),
         '## Table 2 — Case 1, x0 = (1, 4, 0): distance error',
@@ -558,7 +558,7 @@ ARRIVAL_COLUMNS = (
 
 
 def write_path_report(path: Path, document: dict, figures: dict, gains_path: Path,
-                      seconds: float, jobs: int, path_file: Path, duration: float,
+                      seconds: float, where: str, path_file: Path, duration: float,
                       reference_duration: float) -> None:
     """
     Write ``report.md`` of every controller along one path (``nfmr-compare --path``).
@@ -584,7 +584,7 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
         '(`arrival.*`): zero speed once within the goal tolerances, or when it passed the '
         'goal or ran out of `goal_timeout`. Inputs saturated at v in [0.2, 2] m/s (below '
         'v_min only on the final approach), abs(omega) <= 1.59 rad/s. Gains: '
-        f'`{gains_path}`. {len(runs)} runs on {jobs} processes in {seconds:.1f} s '
+        f'`{gains_path}`. {len(runs)} runs on {where} in {seconds:.1f} s '
         '(`nfmr-compare --path`).',
         '',
         *_sensing_note(document.get('sensing', 'ideal')),

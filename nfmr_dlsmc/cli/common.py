@@ -9,6 +9,7 @@ paths checked before the long work starts.
 """
 
 import argparse
+from contextlib import contextmanager
 import math
 import os
 from pathlib import Path
@@ -19,6 +20,7 @@ from nfmr_dlsmc.cli.entry import INTERRUPTED_STATUS, take_signals
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
+from nfmr_dlsmc.runtime.worker_pool import Cluster
 
 #: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
 #: measured; rounded up) [bytes].
@@ -298,3 +300,57 @@ def check_memory(needed: float, what: str) -> None:
     if needed > available:
         raise UsageError(f'{what} needs about {needed / 2**30:.3g} GiB of memory; '
                          f'{available / 2**30:.3g} GiB are available')
+
+
+def add_workers(parser: argparse.ArgumentParser, what: str) -> None:
+    """Add ``--jobs`` and ``--scheduler``: where the command's ``what`` run."""
+    parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1,
+                        help=f'processes sharing the {what} on this machine (default: all '
+                             'cores)')
+    parser.add_argument('--scheduler', metavar='ADDRESS', default=None,
+                        help=f'run the {what} on the Dask cluster of this scheduler (e.g. '
+                             'tcp://10.0.0.5:8786; every worker with nfmr installed) instead '
+                             'of --jobs processes here')
+
+
+@contextmanager
+def workers(args):
+    """
+    Yield where the runs go: ``args.jobs`` processes here, or the open ``--scheduler`` cluster.
+
+    Raises
+    ------
+    ClusterError
+        The scheduler does not answer, or has no worker.
+
+    """
+    if args.scheduler is None:
+        yield args.jobs
+        return
+    with Cluster(args.scheduler) as cluster:
+        yield cluster
+
+
+def describe_workers(where) -> str:
+    """Return "N processes" or "the Dask cluster at ADDRESS (N threads)" for a progress line."""
+    if isinstance(where, Cluster):
+        return f'the Dask cluster at {where.address} ({where.jobs} threads)'
+    return f'{where} processes'
+
+
+def cluster_report(where) -> dict | None:
+    """Return the cluster's scheduler and the workers that left during the runs (None here)."""
+    if not isinstance(where, Cluster):
+        return None
+    return {'scheduler': where.address, 'workers_departed': where.departed()}
+
+
+def format_cluster_report(report: dict | None) -> str:
+    """Return the summary's line on the cluster ('' when the runs were here)."""
+    if report is None:
+        return ''
+    left = report['workers_departed']
+    if not left:
+        return f"cluster: {report['scheduler']}, every worker stayed"
+    return (f"cluster: {report['scheduler']}; {len(left)} worker(s) left during the runs "
+            f"({', '.join(left)}): Dask ran their runs again on the others")

@@ -11,7 +11,6 @@ it and arrived.
 
 import argparse
 import json
-import os
 from pathlib import Path
 import sys
 import time
@@ -28,14 +27,18 @@ from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS
 from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
+    add_workers,
     check_run_length,
     check_writable,
+    cluster_report,
+    describe_workers,
+    format_cluster_report,
     json_ready,
     OneLineParser,
-    positive_integer,
     positive_number,
     run_command,
     UsageError,
+    workers,
 )
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
@@ -74,8 +77,7 @@ def _parser() -> argparse.ArgumentParser:
                         help='comparison gains file (default config/comparison.yaml)')
     parser.add_argument('--controllers', nargs='+', choices=CONTROLLER_NAMES,
                         default=list(CONTROLLER_NAMES))
-    parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1,
-                        help='worker processes (default: all cores)')
+    add_workers(parser, 'runs')
     return parser
 
 
@@ -111,31 +113,39 @@ def _run(args) -> int:
         if args.duration is None:
             args.duration = CASE1_LONGITUDINAL.duration
         tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
-    # Its figures show a point every DECIMATION steps: at least one.
-    check_run_length(args.duration, tasks[0][3].dt, min(args.jobs, len(tasks)), DECIMATION)
-    begin = time.perf_counter()
+    with workers(args) as where:
+        # Its figures show a point every DECIMATION steps: at least one.
+        check_run_length(args.duration, tasks[0][3].dt,
+                         min(args.jobs if args.scheduler is None else 1, len(tasks)),
+                         DECIMATION)
+        begin = time.perf_counter()
 
-    def progress(done, total, key):
-        print(f'\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  '
-              f'{key[0]} {key[1]} {key[2]:<16}', end='', file=sys.stderr, flush=True)
+        def progress(done, total, key):
+            print(f'\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  '
+                  f'{key[0]} {key[1]} {key[2]:<16}', end='', file=sys.stderr, flush=True)
 
-    odometry = '' if args.sensing is None else f' with {args.sensing} odometry'
-    print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
-          f'plant{odometry}, {args.jobs} processes, gains from {gains_path}', file=sys.stderr)
-    metrics, series = run_all(tasks, args.jobs, progress)
-    print(file=sys.stderr)
+        odometry = '' if args.sensing is None else f' with {args.sensing} odometry'
+        print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
+              f'plant{odometry}, {describe_workers(where)}, gains from {gains_path}',
+              file=sys.stderr)
+        metrics, series = run_all(tasks, where, progress)
+        print(file=sys.stderr)
+        cluster = cluster_report(where)
+        where = describe_workers(where)
+    if cluster is not None:
+        print(format_cluster_report(cluster), file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
     document = results_document(metrics, args.plant, args.sensing)
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
     if reference is None:
         figures = write_figures(args.out, series, names, args.plant)
         write_report(args.out / 'report.md', document, figures, gains_path,
-                     time.perf_counter() - begin, len(tasks), args.jobs,
+                     time.perf_counter() - begin, len(tasks), where,
                      duration=args.duration)
     else:
         figures = write_path_figure(args.out, series, names, args.plant, args.path.name)
         write_path_report(args.out / 'report.md', document, figures, gains_path,
-                          time.perf_counter() - begin, args.jobs, args.path, args.duration,
+                          time.perf_counter() - begin, where, args.path, args.duration,
                           reference.duration)
     print(f"wrote {args.out / 'report.md'}, {len(figures)} figures and results.json "
           f'in {time.perf_counter() - begin:.1f} s', file=sys.stderr)

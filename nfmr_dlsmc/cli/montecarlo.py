@@ -7,7 +7,6 @@ The runs and their summary are :mod:`nfmr_dlsmc.analysis.montecarlo`'s.
 import argparse
 import json
 import math
-import os
 from pathlib import Path
 import sys
 import time
@@ -23,10 +22,14 @@ from nfmr_dlsmc.analysis.montecarlo import (
 )
 from nfmr_dlsmc.analysis.run_setup import pybullet_world, random_starts, start_pose
 from nfmr_dlsmc.cli.common import (
+    add_workers,
     BATCH_ROBOT_BYTES,
     check_memory,
     check_run_length,
     check_writable,
+    cluster_report,
+    describe_workers,
+    format_cluster_report,
     json_ready,
     non_negative_integer,
     number_triple,
@@ -35,6 +38,7 @@ from nfmr_dlsmc.cli.common import (
     positive_number,
     run_command,
     UsageError,
+    workers,
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
@@ -84,8 +88,7 @@ def _parser() -> argparse.ArgumentParser:
                         help='write a convergence-time histogram and a scatter of the starts '
                              'here')
     parser.add_argument('--json', action='store_true', help='print one JSON object (last line)')
-    parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1,
-                        help='processes sharing the robots (default: all cores)')
+    add_workers(parser, 'runs')
     return parser
 
 
@@ -102,7 +105,6 @@ def _run(args) -> int:
     if args.duration is None:  # a path's own and a margin to arrive, else the paper's
         args.duration = getattr(params.trajectory, 'duration',
                                 PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
-    check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.n))
     check_memory(args.n * BATCH_ROBOT_BYTES, f'--n {args.n} starts')
     if args.plots:
         check_writable(args.plots, '--plots', directory=True)
@@ -114,20 +116,31 @@ def _run(args) -> int:
     origin = start_pose(params.trajectory)
     starts = random_starts(np.random.default_rng(args.seed), origin, args.x0_range, args.n)
     batch = uses_batch(args.plant, params.dlsmc, params.trajectory)
-    how = ('batch simulator' if batch else
-           f'one {args.plant} run per start on {args.jobs} processes'
-           + ('' if args.plant == 'pybullet' else
-              " (robot profile: the batch simulator implements the paper's law only)"))
-    print(f'{args.n} starts, {args.duration:g} s each, {how} ...', file=sys.stderr, flush=True)
-    begin = time.perf_counter()
-    runs = run_starts(args.plant, params, world, starts, args.duration,
-                      disturbance_by_name(args.disturbance), args.hold_last, args.jobs,
-                      _progress(begin, args.plant))
-    if not batch:
-        print(file=sys.stderr)  # after the progress line
-    elapsed = time.perf_counter() - begin
+    if batch and args.scheduler is not None:
+        raise UsageError("--scheduler: the paper's law on the kinematic model runs in the "
+                         'batch simulator, on this machine (--jobs); a cluster takes one run '
+                         'per start (--plant pybullet, or a robot-profile --params)')
+    with workers(args) as where:
+        check_run_length(args.duration, params.dlsmc.dt,
+                         min(args.jobs if args.scheduler is None else 1, args.n))
+        how = ('batch simulator' if batch else
+               f'one {args.plant} run per start on {describe_workers(where)}'
+               + ('' if args.plant == 'pybullet' else
+                  " (robot profile: the batch simulator implements the paper's law only)"))
+        print(f'{args.n} starts, {args.duration:g} s each, {how} ...', file=sys.stderr,
+              flush=True)
+        begin = time.perf_counter()
+        runs = run_starts(args.plant, params, world, starts, args.duration,
+                          disturbance_by_name(args.disturbance), args.hold_last, where,
+                          _progress(begin, args.plant))
+        if not batch:
+            print(file=sys.stderr)  # after the progress line
+        elapsed = time.perf_counter() - begin
+        cluster = cluster_report(where)
     summary = {'plant': args.plant, 'params': args.params,
                **summarise(args.plant, starts, runs, args.duration, args.hold_last)}
+    if cluster is not None:
+        summary['cluster'] = cluster
     summary['wall_s'] = round(elapsed, 3)
     summary['robot_steps_per_s'] = args.n * round(args.duration / params.dlsmc.dt) / elapsed
     if args.plots:
@@ -137,6 +150,8 @@ def _run(args) -> int:
         print(json.dumps(json_ready(summary)))
     else:
         print(format_summary(summary))
+        if cluster is not None:
+            print(format_cluster_report(cluster))
     return 0
 
 

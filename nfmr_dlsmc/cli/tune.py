@@ -10,7 +10,6 @@ chassis and sensing of a parameter file (:mod:`nfmr_dlsmc.analysis.chassis_tunin
 import argparse
 import json
 import math
-import os
 from pathlib import Path
 import sys
 
@@ -37,8 +36,11 @@ from nfmr_dlsmc.analysis.outer_tuning import (
 )
 from nfmr_dlsmc.cli.common import (
     add_output_file,
+    add_workers,
     check_output_file,
     check_run_length,
+    cluster_report,
+    format_cluster_report,
     json_ready,
     non_negative_integer,
     OneLineParser,
@@ -46,6 +48,7 @@ from nfmr_dlsmc.cli.common import (
     positive_number,
     run_command,
     UsageError,
+    workers,
 )
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
@@ -141,8 +144,7 @@ def _parser() -> argparse.ArgumentParser:
     add_output_file(parser, PLANT_DEFAULTS['kinematic']['out'], 'parameter file')
     parser.set_defaults(out=None)
     parser.add_argument('--json', action='store_true')
-    parser.add_argument('--jobs', type=positive_integer, default=os.cpu_count() or 1,
-                        help='processes sharing the work (default: all cores)')
+    add_workers(parser, 'trials (--plant pybullet; the kinematic search runs here)')
     return parser
 
 
@@ -169,6 +171,9 @@ def _run(args) -> int:
 def _tune_kinematic(args) -> int:
     check_output_file(args.out, args.force)
     params = controller_params(load_params_file(args.params) if args.params else {})
+    if args.scheduler is not None:
+        raise UsageError('--scheduler applies to --plant pybullet: the kinematic search runs '
+                         'the batch simulator on this machine (--jobs)')
     check_run_length(args.duration, params.dlsmc.dt, min(args.jobs, args.finalists))
     report = tune_outer_gains(
         params, args.candidates, args.finalists, args.screen_starts, args.n, args.x0_range,
@@ -193,13 +198,18 @@ def _tune_on_chassis(args) -> int:
     history = out.with_name(f'{out.stem}_history.png')
     importances = out.with_name(f'{out.stem}_importances.png')
     check_output_file(out, args.force)
-    check_run_length(setup.duration, tuning.evaluations[0].params.dlsmc.dt, args.jobs)
+    check_run_length(setup.duration, tuning.evaluations[0].params.dlsmc.dt,
+                     args.jobs if args.scheduler is None else 1)
     url = args.storage or f"sqlite:///{out.parent.resolve() / 'study.db'}"
     name = args.study or out.stem
     study = open_study(url, name, tuning, args.force)
     try:
-        run_study(setup, url, name, args.trials, args.timeout, args.seed, args.jobs,
-                  lambda text: print(text, file=sys.stderr, flush=True))
+        with workers(args) as where:
+            run_study(setup, url, name, args.trials, args.timeout, args.seed, where,
+                      lambda text: print(text, file=sys.stderr, flush=True))
+            cluster = cluster_report(where)
+        if cluster is not None:
+            print(format_cluster_report(cluster), file=sys.stderr)
     except KeyboardInterrupt:
         print(f'\nnfmr-tune: study {name} in {url} keeps its finished trials; the same '
               'command resumes it', file=sys.stderr)
