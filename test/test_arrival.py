@@ -107,6 +107,23 @@ def test_a_robot_level_with_or_past_the_goal_stops_where_it_is():
     assert controller.position_error == pytest.approx(math.hypot(0.02, 0.03))
 
 
+def test_a_robot_ahead_of_a_slow_reference_waits_for_it_instead_of_turning_round():
+    # Slower than v_min (0.2 m/s), the reference runs along x towards the goal; a robot
+    # more than half the goal tolerance (2.5 mm) ahead of it is held at zero; behind it, or
+    # ahead of a reference at cruising speed, the law drives.
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, ArrivalConfig())
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))  # the reference leaves
+    slow = (0.9, 0.0, 0.1, 0.0)  # x_d, y_d [m], xdot_d, ydot_d [m/s]
+    assert _step_at(controller, (0.904, 0.001, 0.0), slow) == (0.0, 0.0)
+    assert not controller.ended
+    v, _ = _step_at(controller, (0.902, 0.001, 0.0), slow)  # 2 mm ahead: within the share
+    assert v > 0.0
+    v, _ = _step_at(controller, (0.895, 0.001, 0.0), slow)  # behind it
+    assert v > 0.0
+    v, _ = _step_at(controller, (0.91, 0.001, 0.0), (0.9, 0.0, 0.5, 0.0))  # at speed
+    assert v > 0.0
+
+
 def test_a_blocked_robot_stops_after_the_goal_timeout_not_before():
     config = ArrivalConfig(goal_timeout=0.5)
     controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, config)

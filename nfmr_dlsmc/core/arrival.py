@@ -44,6 +44,11 @@ _TRACKING, _ARRIVED, _PASSED, _TIMED_OUT = 0.0, 1.0, 2.0, 3.0
 #: tolerance of error; early enough that the law is not asked to steer at a speed of
 #: nearly zero, where its heading command is the bearing of a millimetre's error.
 FINAL_SHARE = 0.5
+#: A robot ahead of a reference slower than v_min by more than this share of
+#: ``goal_tolerance`` [-] waits for it (zero speed, steering held): the laws never reverse,
+#: so to meet a reference behind it they would turn round, and a chassis that brakes later
+#: than a reference slowing to rest at the goal is ahead of it by millimetres.
+WAIT_SHARE = 0.5
 
 
 @documented
@@ -152,6 +157,12 @@ class ArrivingController:
             self._at_rest += self.controller.period if dt is None else dt
             if self._at_rest > config.goal_timeout:
                 return self._end(_TIMED_OUT, distance, yaw_error)
+        speed_d = math.hypot(xdot_d, ydot_d)
+        if 0.0 < speed_d < self.controller.limits.v_min:
+            heading = math.atan2(ydot_d, xdot_d)
+            ahead = (x - x_d) * math.cos(heading) + (y - y_d) * math.sin(heading)
+            if ahead > WAIT_SHARE * config.goal_tolerance:
+                return 0.0, 0.0  # wait for the slow reference rather than turn round to it
         return self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
                                     yddot_d)
 

@@ -73,6 +73,11 @@ class SaturatedController:
         return min(v_min, v_ref) if self.follow_slow_reference else v_min
 
     @property
+    def limits(self) -> InputLimits:
+        """Return the input limits."""
+        return self._limits
+
+    @property
     def period(self) -> float:
         """Return the default step length [s] (the control period)."""
         return self._dt
