@@ -17,7 +17,8 @@ Below it: :class:`~nfmr_dlsmc.core.validation.ParameterError` (and its
 :class:`~nfmr_dlsmc.bag.reader.BagError`, :class:`~nfmr_dlsmc.cli.common.UsageError`,
 :class:`~nfmr_dlsmc.ros.node_main.RosArgumentsError`,
 :class:`~nfmr_dlsmc.analysis.animation.AnimationError`,
-:class:`~nfmr_dlsmc.analysis.chassis_tuning.StudyError` and
+:class:`~nfmr_dlsmc.analysis.chassis_tuning.StudyError`,
+:class:`~nfmr_dlsmc.runtime.worker_pool.ClusterError` and
 :class:`~nfmr_dlsmc.ros.launcher.RunError`.
 """
 
