@@ -31,17 +31,21 @@ $(STAMP): setup.py setup.cfg package.xml
 	    >> $(BIN)/activate
 	touch $(STAMP)
 
+# This clone's install first, as `source .venv/bin/activate` puts it: with another nfmr
+# environment active, its share/ would otherwise be taken for this clone's shipped files.
+OWN := AMENT_PREFIX_PATH="$(abspath $(VENV))$${AMENT_PREFIX_PATH:+:$$AMENT_PREFIX_PATH}"
+
 run: setup
-	$(BIN)/nfmr-run
+	$(OWN) $(BIN)/nfmr-run
 
 test: setup
-	$(BIN)/python -m pytest -q
+	$(OWN) $(BIN)/python -m pytest -q
 
 bench: setup
-	$(BIN)/nfmr-bench --nodes
+	$(OWN) $(BIN)/nfmr-bench --nodes
 
 report: setup
-	$(BIN)/nfmr-compare --out report
+	$(OWN) $(BIN)/nfmr-compare --out report
 
 # The parameter reference, generated from the schema (test_parameter_schema.py checks it).
 docs: setup
