@@ -19,8 +19,8 @@ $(STAMP): setup.py setup.cfg package.xml
 	# The ament layout that `ros2 run` and ament_index expect, as colcon would install it:
 	# executables in lib/<pkg>, the package marker in the index, package.xml and config.
 	mkdir -p $(PKG_LIB) $(PKG_SHARE) $(INDEX)
-	ln -sf ../../bin/controller $(PKG_LIB)/controller
-	ln -sf ../../bin/sim $(PKG_LIB)/sim
+	ln -sf ../../bin/nfmr-controller $(PKG_LIB)/controller
+	ln -sf ../../bin/nfmr-sim $(PKG_LIB)/sim
 	cp resource/nfmr_dlsmc $(INDEX)/nfmr_dlsmc
 	# Relative links: the clone may move; `source .venv/bin/activate` sets AMENT_PREFIX_PATH
 	# as a ROS install's setup script does.

@@ -1,8 +1,31 @@
 from glob import glob
+from pathlib import Path
 
 from setuptools import find_packages, setup
+from setuptools.command.install_scripts import install_scripts
 
 package_name = 'nfmr_dlsmc'
+# The nodes' console scripts carry the package's prefix in a shared bin/; in the package's
+# own lib/<package>/ (where colcon installs them and `ros2 run` looks), the short names
+# `ros2 run nfmr_dlsmc controller` and `... sim` stay, as links to the prefixed scripts.
+node_scripts = {'controller': 'nfmr-controller', 'sim': 'nfmr-sim'}
+
+
+class InstallScripts(install_scripts):
+    """Install the console scripts, plus the nodes' short names in lib/<package>/."""
+
+    def run(self):
+        """Install the scripts, then link the short names if this is lib/<package>/."""
+        super().run()
+        target = Path(self.install_dir)
+        if target.parts[-2:] != ('lib', package_name) or self.dry_run:
+            return
+        for short, script in node_scripts.items():
+            link = target / short
+            link.unlink(missing_ok=True)
+            link.symlink_to(script)
+            self.outfiles.append(str(link))
+
 
 setup(
     name=package_name,
@@ -54,11 +77,12 @@ setup(
                 'for four-wheel independently steered robots, with a pybullet simulator.',
     license='Apache-2.0',
     tests_require=['pytest'],
+    cmdclass={'install_scripts': InstallScripts},
     entry_points={
         'console_scripts': [
             'nfmr-eval = nfmr_dlsmc.cli.entry:evaluate',
-            'sim = nfmr_sim.ros.sim_node:main',
-            'controller = nfmr_dlsmc.ros.controller_node:main',
+            'nfmr-sim = nfmr_sim.ros.sim_node:main',
+            'nfmr-controller = nfmr_dlsmc.ros.controller_node:main',
             'nfmr-run = nfmr_dlsmc.cli.entry:run',
             'nfmr-analyze = nfmr_dlsmc.cli.entry:analyze',
             'nfmr-replay = nfmr_dlsmc.cli.entry:replay',

@@ -152,7 +152,7 @@ def test_killed_recorder_leaves_a_bag_readable_up_to_its_last_chunk(tmp_path):
 
 def test_a_command_flood_hardly_slows_the_realtime_sim():
     context = new_context()
-    sim_proc = subprocess.Popen([str(Path(sys.executable).parent / 'sim'), '--ros-args', '-p',
+    sim_proc = subprocess.Popen([str(Path(sys.executable).parent / 'nfmr-sim'), '--ros-args', '-p',
                                  'mode:=realtime'], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
     node = Node('flooder', context=context)
@@ -258,10 +258,10 @@ def test_dds_across_network_namespaces_still_converges_in_lockstep(two_hosts):
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET',
                FASTDDS_BUILTIN_TRANSPORTS='UDPv4')
     bin_dir = Path(sys.executable).parent
-    procs = [subprocess.Popen(['ip', 'netns', 'exec', a, str(bin_dir / 'sim'), '--ros-args',
+    procs = [subprocess.Popen(['ip', 'netns', 'exec', a, str(bin_dir / 'nfmr-sim'), '--ros-args',
                                '--params-file', config, '-p', 'start_after_subscribers:=1'],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-             subprocess.Popen(['ip', 'netns', 'exec', b, str(bin_dir / 'controller'),
+             subprocess.Popen(['ip', 'netns', 'exec', b, str(bin_dir / 'nfmr-controller'),
                                '--ros-args', '--params-file', config],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
@@ -301,11 +301,11 @@ def test_a_killed_sim_stops_the_robot_and_a_new_one_is_tracked_again(tmp_path):
     spinner = Spinner(context, listener)
 
     def start_sim():
-        return subprocess.Popen([str(bin_dir / 'sim'), '--ros-args', '--params-file', config,
+        return subprocess.Popen([str(bin_dir / 'nfmr-sim'), '--ros-args', '--params-file', config,
                                  '-p', 'start_after_subscribers:=1'],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
-    controller = subprocess.Popen([str(bin_dir / 'controller'), '--ros-args', '--params-file',
+    controller = subprocess.Popen([str(bin_dir / 'nfmr-controller'), '--ros-args', '--params-file',
                                    config], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                   text=True)
     sim = start_sim()
@@ -351,7 +351,7 @@ def test_stale_odometry_stops_a_controller_process_soon_after_the_timeout():
     commands = peer.create_subscription(Twist, 'cmd_vel', lambda m: replies.append(
         (time.monotonic(), m.linear.x)), qos)
     spinner = Spinner(context, peer)
-    controller = subprocess.Popen([str(Path(sys.executable).parent / 'controller'),
+    controller = subprocess.Popen([str(Path(sys.executable).parent / 'nfmr-controller'),
                                    '--ros-args', '-p', 'odom_timeout:=0.1'],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     delays = []
@@ -392,7 +392,8 @@ def test_each_node_ends_at_once_on_a_signal_while_they_run_together(sig):
     # with exit 0 and no traceback (a publisher whose context is gone must not raise).
     config = str(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml')
     bin_dir = Path(sys.executable).parent
-    procs = {name: subprocess.Popen([str(bin_dir / name), '--ros-args', '--params-file', config,
+    procs = {name: subprocess.Popen([str(bin_dir / f'nfmr-{name}'), '--ros-args',
+                                     '--params-file', config,
                                      *(['-p', 'mode:=realtime'] if name == 'sim' else [])],
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
              for name in ('sim', 'controller')}
@@ -438,7 +439,7 @@ def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
     commands = peer.create_subscription(Twist, 'cmd_vel', lambda m: replies.append(
         (time.monotonic(), m.linear.x, m.angular.z)), qos)
     spinner = Spinner(context, peer)
-    controller = subprocess.Popen([str(Path(sys.executable).parent / 'controller'),
+    controller = subprocess.Popen([str(Path(sys.executable).parent / 'nfmr-controller'),
                                    '--ros-args', '-p', 'odom_timeout:=30.0', '-p',
                                    'restart_threshold:=30.0'],
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -493,7 +494,7 @@ def test_another_source_on_the_runs_domain_ends_it_with_an_error(tmp_path):
     reservation = reserve_domain()  # a domain no other run takes meanwhile
     domain = reservation.domain
     env = dict(os.environ, **reservation.environment())
-    intruder = subprocess.Popen([str(Path(sys.executable).parent / 'sim'), '--ros-args', '-p',
+    intruder = subprocess.Popen([str(Path(sys.executable).parent / 'nfmr-sim'), '--ros-args', '-p',
                                  'mode:=realtime'], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, env=env)
     run = LoggedRun(tmp_path, '--domain', str(domain), '--duration', '30', '--no-compare')

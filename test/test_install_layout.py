@@ -29,6 +29,13 @@ def test_executables_sit_in_lib_of_the_package_and_run():
         assert proc.returncode == 2 and needle in proc.stderr
 
 
+def test_the_nodes_console_scripts_carry_the_prefix_in_bin():
+    # bin/ is shared with every other package of the environment: no generic names there.
+    bin_dir = PREFIX / 'bin'
+    assert (bin_dir / 'nfmr-controller').is_file() and (bin_dir / 'nfmr-sim').is_file()
+    assert not (bin_dir / 'controller').exists() and not (bin_dir / 'sim').exists()
+
+
 def test_activating_the_environment_is_sourcing_a_ros_install():
     # `source .venv/bin/activate` sets AMENT_PREFIX_PATH, so ament_index resolves the
     # package without anything else; the share entries do not name the clone's path.

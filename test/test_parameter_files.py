@@ -31,7 +31,7 @@ CASES = [
 def test_controller_refuses_bad_parameter_files(tmp_path, name, text, needle):
     path = tmp_path / 'params.yaml'
     path.write_text(text)
-    proc = subprocess.run([str(BIN / 'controller'), '--ros-args', '--params-file', str(path)],
+    proc = subprocess.run([str(BIN / 'nfmr-controller'), '--ros-args', '--params-file', str(path)],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert needle in proc.stderr
@@ -49,17 +49,17 @@ def test_controller_refuses_bad_parameter_files(tmp_path, name, text, needle):
 def test_sim_refuses_bad_parameter_files(tmp_path, text, needle):
     path = tmp_path / 'params.yaml'
     path.write_text(text)
-    proc = subprocess.run([str(BIN / 'sim'), '--ros-args', '--params-file', str(path)],
+    proc = subprocess.run([str(BIN / 'nfmr-sim'), '--ros-args', '--params-file', str(path)],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and needle in proc.stderr and 'Traceback' not in proc.stderr
 
 
 def test_missing_parameter_file_and_bad_ros_arguments(tmp_path):
-    proc = subprocess.run([str(BIN / 'controller'), '--ros-args', '--params-file',
+    proc = subprocess.run([str(BIN / 'nfmr-controller'), '--ros-args', '--params-file',
                            str(tmp_path / 'none.yaml')], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 2 and 'cannot read parameter file' in proc.stderr
-    proc = subprocess.run([str(BIN / 'controller'), '--ros-args', '--badarg'],
+    proc = subprocess.run([str(BIN / 'nfmr-controller'), '--ros-args', '--badarg'],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and 'cannot start' in proc.stderr
     assert 'Traceback' not in proc.stderr
@@ -73,7 +73,8 @@ def test_integers_for_floating_point_parameters_are_taken_as_numbers(tmp_path):
                     'sim:\n  ros__parameters:\n    initial_pose: [1, 4, 0]\n'
                     '    motors: {rated_torque: 20}\n')
     for node, needle in (('controller', 'inner.k1'), ('sim', 'initial_pose')):
-        proc = subprocess.Popen([str(BIN / node), '--ros-args', '--params-file', str(path)],
+        proc = subprocess.Popen([str(BIN / f'nfmr-{node}'), '--ros-args', '--params-file',
+                                 str(path)],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         try:
             out, _ = proc.communicate(timeout=4)

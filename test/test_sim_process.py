@@ -15,7 +15,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import SetBool
 from visualization_msgs.msg import MarkerArray
 
-SIM = str(Path(sys.executable).parent / 'sim')
+SIM = str(Path(sys.executable).parent / 'nfmr-sim')
 
 
 def test_sim_starts_from_the_paper_file_serves_and_stops_on_sigint(request):

@@ -49,17 +49,17 @@ CASES = [
      lambda d: ['--gains', str(_write(d / 'g.yaml', 'controllers:\n  pid: {kp: -2}\n')),
                 '--out', str(d / 'report')],
      'pid.kp = -2'),
-    ('controller', lambda d: ['--ros-args', '--params-file', str(d / 'missing.yaml')],
+    ('nfmr-controller', lambda d: ['--ros-args', '--params-file', str(d / 'missing.yaml')],
      'cannot read parameter file {d}/missing.yaml'),
-    ('controller', lambda d: ['--ros-args', '-p', 'inner.p1:=32'],
+    ('nfmr-controller', lambda d: ['--ros-args', '-p', 'inner.p1:=32'],
      'inner.p1 = 32: must be a positive odd integer'),
-    ('controller', lambda d: ['--ros-args', '--no-such-ros-argument'], 'cannot start'),
-    ('sim',
+    ('nfmr-controller', lambda d: ['--ros-args', '--no-such-ros-argument'], 'cannot start'),
+    ('nfmr-sim',
      lambda d: ['--ros-args', '--params-file',
                 str(_write(d / 'p.yaml', 'sim:\n  ros__parameters:\n'
                                          '    motors: {drive_gear_ratio: 0.0}\n'))],
      'motors.drive_gear_ratio = 0.0: must be > 0'),
-    ('sim', lambda d: ['--ros-args', '-p', 'mode:=fast'], "mode = 'fast'"),
+    ('nfmr-sim', lambda d: ['--ros-args', '-p', 'mode:=fast'], "mode = 'fast'"),
     # Numbers out of range: refused before any work, not deep in a worker.
     ('nfmr-compare', lambda d: ['--duration', '0.0004', '--controllers', 'pid', '--out',
                                 str(d / 'r')], 'shorter than 10 control periods'),
@@ -116,5 +116,7 @@ def test_a_user_error_is_one_line_and_exit_2(tmp_path, name, arguments, needle):
     assert proc.returncode == 2, proc.stderr
     lines = _ours(proc.stderr)
     assert len(lines) == 1, proc.stderr
-    assert lines[0].startswith(f'{name}: error: '), lines[0]
+    # A node's errors carry its node name (controller, sim), as its log lines do.
+    prog = name.removeprefix('nfmr-') if name in ('nfmr-controller', 'nfmr-sim') else name
+    assert lines[0].startswith(f'{prog}: error: '), lines[0]
     assert needle.format(d=tmp_path) in lines[0]

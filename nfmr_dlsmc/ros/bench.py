@@ -92,7 +92,7 @@ def node_figures(seconds: float) -> dict:
     procs = []
     try:
         # Latency: one reply per odometry message, controller in odometry-tick mode.
-        ctrl = subprocess.Popen([str(BIN / 'controller')], stdout=subprocess.DEVNULL,
+        ctrl = subprocess.Popen([str(BIN / 'nfmr-controller')], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
         procs.append(ctrl)
         while probe.count_subscribers('odom') == 0:
@@ -114,7 +114,7 @@ def node_figures(seconds: float) -> dict:
         ctrl.terminate()
         ctrl.wait(timeout=10)
         # The 1 kHz loop: clock mode, tracking the one odometry it gets, for `seconds`.
-        ctrl = subprocess.Popen([str(BIN / 'controller'), '--ros-args', '-p',
+        ctrl = subprocess.Popen([str(BIN / 'nfmr-controller'), '--ros-args', '-p',
                                  'tick_source:=clock', '-p', 'odom_timeout:=1000000.0',
                                  '-p', 'restart_threshold:=1000000.0'],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -142,7 +142,7 @@ def node_figures(seconds: float) -> dict:
             [sys.executable, '-c', 'from nfmr_dlsmc.ros.bench import plain_timer_main; '
              f'plain_timer_main({seconds})'], capture_output=True, text=True, timeout=seconds + 60)
         out['plain_rclpy_timer'] = json.loads(timer.stdout.strip().splitlines()[-1])
-        sim = subprocess.Popen([str(BIN / 'sim'), '--ros-args', '-p', 'mode:=realtime'],
+        sim = subprocess.Popen([str(BIN / 'nfmr-sim'), '--ros-args', '-p', 'mode:=realtime'],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         procs.append(sim)
         time.sleep(3.0)
