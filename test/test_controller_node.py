@@ -183,6 +183,30 @@ def test_an_integer_set_live_for_a_real_parameter_is_that_number(setup):
     assert not node.set_parameters([Parameter('inner.k1', value='two')])[0].successful
 
 
+def test_descriptors_carry_the_numeric_range_and_a_live_value_outside_it_the_rule(setup):
+    # As `ros2 param describe` and rqt see them, over the parameter services.
+    from rclpy.parameter_client import AsyncParameterClient
+
+    node, peer = setup()
+    client = AsyncParameterClient(peer, 'controller')
+    assert client.wait_for_services(timeout_sec=10.0)
+    future = client.describe_parameters(['inner.eps', 'odom_timeout', 'inner.p1'])
+    wait_for(future.done, what='the descriptors')
+    eps, timeout, p1 = future.result().descriptors
+    assert (eps.floating_point_range[0].from_value, eps.floating_point_range[0].to_value) == (
+        0.0, math.pi)
+    assert eps.additional_constraints == '(0, pi)'  # the rule's text stays
+    assert timeout.floating_point_range[0].from_value == 0.0
+    assert math.isinf(timeout.floating_point_range[0].to_value)
+    assert not p1.floating_point_range and not p1.integer_range  # checked with q1: no range
+    future = client.set_parameters([Parameter('inner.eps', value=-0.01)])
+    wait_for(future.done, what='the refusal')
+    result = future.result().results[0]
+    assert not result.successful
+    assert result.reason == 'inner.eps = -0.01 rad: must be > 0'
+    assert node.get_parameter('inner.eps').value > 0
+
+
 @pytest.mark.parametrize('name, value, reason', [
     ('inner.p1', 32, 'positive odd integer'),
     ('outer.q2', 35, '1 < outer.p2/outer.q2 < 2'),

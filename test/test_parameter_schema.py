@@ -1,6 +1,7 @@
 """One schema per parameter: the parameter reference, the config comments, the checks."""
 
 from dataclasses import fields, is_dataclass
+import math
 from pathlib import Path
 import re
 
@@ -134,6 +135,22 @@ def test_a_value_breaking_a_sign_rule_is_refused_naming_parameter_value_and_unit
         with pytest.raises(ParameterError) as info:
             from_flat(cls, {p.name: -1.0}, **required)
         assert str(info.value).startswith(f'{p.name} = -1.0 {p.unit}'.rstrip() + ': must be')
+
+
+@pytest.mark.parametrize('node', ['controller', 'sim'])
+def test_a_rules_bounds_hold_its_default_and_nothing_it_refuses_lies_inside(node):
+    # The bounds become the descriptor's numeric range: every value the rule allows is
+    # inside, and what lies outside is refused by the rule itself.
+    bounded = [p for p in NODES[node] if p.rule.bounds is not None]
+    assert len(bounded) > 10
+    for p in bounded:
+        low, high = p.rule.bounds
+        assert low <= p.default <= high, p.name
+        for outside in (low - 1, high + 1):
+            if math.isfinite(outside):
+                with pytest.raises(ParameterError, match=re.escape(p.name)):
+                    p.check(p.kind(outside))
+    assert all(p.rule.bounds is None for p in NODES[node] if p.kind not in (int, float))
 
 
 def test_defaults_and_live_flags_of_the_nodes():

@@ -23,6 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, fields, MISSING
 from functools import cache
 import inspect
+import math
 import textwrap
 import typing
 
@@ -58,11 +59,17 @@ class Rule:
         ``check(name, value, unit)`` raises
         :class:`~nfmr_dlsmc.core.validation.ParameterError` for a value that breaks the
         rule; None when the owning class checks it together with other parameters.
+    bounds : tuple of float, or None
+        The closed interval ``(low, high)`` that holds every value the rule allows (an open
+        end of the rule is its limit, e.g. ``(0, inf)`` for ``> 0``): the numeric range of
+        the parameter's ROS descriptor, which ``ros2 param describe`` and rqt show. None
+        where the rule is no interval.
 
     """
 
     text: str
     check: Callable[[str, object, str], object] | None = None
+    bounds: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -314,8 +321,8 @@ def _check_flag(name: str, value, unit: str = '') -> bool:
     return value
 
 
-POSITIVE = Rule('> 0', check_positive)
-NON_NEGATIVE = Rule('>= 0', check_non_negative)
+POSITIVE = Rule('> 0', check_positive, (0.0, math.inf))
+NON_NEGATIVE = Rule('>= 0', check_non_negative, (0.0, math.inf))
 FINITE = Rule('finite', check_finite)
 FLAG = Rule('true or false', _check_flag)
 #: The exponents p, q of a terminal sliding term: their class checks each pair together
@@ -325,7 +332,8 @@ ODD_INTEGER = Rule('positive odd integer')
 
 def greater(bound: float) -> Rule:
     """Return the rule: a finite number > ``bound``."""
-    return Rule(f'> {bound:g}', lambda name, value, unit: check_greater(name, value, bound, unit))
+    return Rule(f'> {bound:g}', lambda name, value, unit: check_greater(name, value, bound, unit),
+                (bound, math.inf))
 
 
 def positive_up_to(bound: float, shown: str, *, inclusive: bool, why: str = '') -> Rule:
@@ -342,7 +350,7 @@ def positive_up_to(bound: float, shown: str, *, inclusive: bool, why: str = '') 
             raise ParameterError(name, value, f'must be {op} {shown}{why}', unit)
         return number
 
-    return Rule(f"(0, {shown}{']' if inclusive else ')'}", check)
+    return Rule(f"(0, {shown}{']' if inclusive else ')'}", check, (0.0, bound))
 
 
 def within(low: float, high: float, why: str = '') -> Rule:
@@ -353,7 +361,7 @@ def within(low: float, high: float, why: str = '') -> Rule:
             raise ParameterError(name, value, f'must be in [{low:g}, {high:g}]{why}', unit)
         return number
 
-    return Rule(f'[{low:g}, {high:g}]', check)
+    return Rule(f'[{low:g}, {high:g}]', check, (low, high))
 
 
 def one_of(*choices: str) -> Rule:
@@ -375,7 +383,7 @@ def at_least(lowest: int) -> Rule:
             raise ParameterError(name, value, f'must be an integer >= {lowest}', unit)
         return value
 
-    return Rule(f'integer >= {lowest}', check)
+    return Rule(f'integer >= {lowest}', check, (lowest, math.inf))
 
 
 def non_empty(what: str, max_length: int | None = None) -> Rule:

@@ -7,12 +7,27 @@ to it (``--params-file``, ``-p``, ``parameter_overrides``) under its own type, w
 this module learns, through public rclpy calls only, what was given.
 :func:`_declare_parameters` checks each against the schema (:mod:`nfmr_dlsmc.core.schema`:
 its name, its type) and declares it again with the schema's type and descriptor
-(description with the unit, rule, read-only flag).
+(description with the unit, rule, numeric range, read-only flag).
+
+A numeric range (``FloatingPointRange`` / ``IntegerRange``, from the rule's bounds) is what
+``ros2 param describe`` and rqt_reconfigure show, as generate_parameter_library's nodes
+carry them; rclpy enforces it before any set-parameters callback, so a live value outside it
+would refuse a value outside it with its own reason, before any set-parameters callback.
+The node checks each value against the parameter's own rule first
+(:meth:`SchemaNodeMixin.set_parameters_atomically`), so a refusal still names the parameter,
+its value with the unit and the rule (``command_timeout = -1.0 s: must be > 0``).
 """
+
+import math
 
 from nfmr_dlsmc.core.schema import Param, unknown_parameter
 from nfmr_dlsmc.core.validation import ParameterError
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    SetParametersResult,
+)
 from rclpy.lifecycle import LifecycleNode
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -23,6 +38,9 @@ __all__ = ['SchemaLifecycleNode', 'SchemaNode', 'SchemaNodeMixin', 'plain_value'
 
 #: Parameters rclpy declares on every node itself.
 _RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
+
+#: The largest value of an int64 parameter: the open top of an integer range.
+_INT64_MAX = 2 ** 63 - 1
 
 _ROS_TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
               float: Parameter.Type.DOUBLE, str: Parameter.Type.STRING,
@@ -59,7 +77,30 @@ class SchemaNodeMixin:
                                  'list (rclpy cannot declare one): leave it out, arrays '
                                  'default to []') from None
         self.parameter_values = _declare_parameters(self, params)
+        self._schema = {p.name: p for p in params}
         self.add_pre_set_parameters_callback(self._numbers_as_declared)
+
+    def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
+        """Set each parameter on its own (rclpy's), refusing one that breaks its own rule."""
+        return [self.set_parameters_atomically([p]) for p in parameter_list]
+
+    def set_parameters_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
+        """
+        Set the parameters together (rclpy's), unless one breaks its own rule.
+
+        The parameter services call this. A value against a rule with bounds is refused here
+        with the rule's message, rather than with the reason of rclpy's range check.
+        """
+        for parameter in parameter_list:
+            param = self._schema.get(parameter.name)
+            if (param is None or param.read_only or param.rule.bounds is None
+                    or parameter.value is None):
+                continue
+            try:
+                param.check(plain_value(parameter.value))
+            except ParameterError as exc:
+                return SetParametersResult(successful=False, reason=str(exc))
+        return super().set_parameters_atomically(parameter_list)
 
     def _numbers_as_declared(self, parameters: list[Parameter]) -> list[Parameter]:
         """
@@ -145,11 +186,16 @@ def _declare_parameters(node: Node, params: list[Param]) -> dict:
 def _declare(node: Node, param: Param, given: Parameter | None):
     """Declare one parameter (``given`` overriding its default); return its value."""
     ros_type = _ROS_TYPES[param.kind]
+    value = param.default if given is None else _as_type(param.name, given, ros_type)
+    # A given value against the rule is declared without the range, which rclpy would
+    # enforce here: the node refuses it with the rule's message (a lifecycle node at
+    # configure, so that a live change can still mend it).
+    ranged = given is None or _obeys(param, value)
     descriptor = ParameterDescriptor(name=param.name, type=ros_type.value,
                                      description=param.summary,
                                      additional_constraints=param.rule_text,
-                                     read_only=param.read_only)
-    value = param.default if given is None else _as_type(param.name, given, ros_type)
+                                     read_only=param.read_only,
+                                     **(_range(param) if ranged else {}))
     if isinstance(value, list) and not value:
         # An empty array carries no element type: declare it by type alone, unset.
         declared = node.declare_parameter(param.name, ros_type, descriptor,
@@ -157,6 +203,35 @@ def _declare(node: Node, param: Param, given: Parameter | None):
     else:
         declared = node.declare_parameter(param.name, value, descriptor, ignore_override=True)
     return list(param.default) if declared.value is None else plain_value(declared.value)
+
+
+def _obeys(param: Param, value) -> bool:
+    """Return whether ``value`` keeps the rule of ``param`` (a rule without a check: yes)."""
+    try:
+        param.check(value)
+    except ParameterError:
+        return False
+    return True
+
+
+def _range(param: Param) -> dict:
+    """
+    Return the descriptor's numeric range of ``param``, from its rule's bounds.
+
+    ``{'floating_point_range': [...]}`` for a float, ``{'integer_range': [...]}`` for an
+    integer, ``{}`` for other kinds and for rules that are no interval. An infinite end of an
+    integer's bounds is int64's limit.
+    """
+    if param.rule.bounds is None:
+        return {}
+    low, high = param.rule.bounds
+    if param.kind is float:
+        return {'floating_point_range': [FloatingPointRange(from_value=float(low),
+                                                            to_value=float(high), step=0.0)]}
+    if param.kind is int:
+        top = _INT64_MAX if math.isinf(high) else int(high)
+        return {'integer_range': [IntegerRange(from_value=int(low), to_value=top, step=0)]}
+    return {}
 
 
 def _as_type(name: str, given: Parameter, ros_type: Parameter.Type):
