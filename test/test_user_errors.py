@@ -7,10 +7,12 @@ must end with exit status 2 and exactly one line on stderr, ``<prog>: error: ...
 the problem, and no traceback.
 """
 
+import os
 from pathlib import Path
 import subprocess
 import sys
 
+from nfmr_dlsmc.cli.common import ros_log_folder
 import pytest
 
 BIN = Path(sys.executable).parent
@@ -120,3 +122,30 @@ def test_a_user_error_is_one_line_and_exit_2(tmp_path, name, arguments, needle):
     prog = name.removeprefix('nfmr-') if name in ('nfmr-controller', 'nfmr-sim') else name
     assert lines[0].startswith(f'{prog}: error: '), lines[0]
     assert needle.format(d=tmp_path) in lines[0]
+
+
+@pytest.mark.parametrize('command', [['nfmr-run', '--duration', '1', '--no-compare'],
+                                     ['nfmr-publish-path', 'paths/warehouse_loop.csv'],
+                                     ['nfmr-controller']])
+def test_a_home_where_ros_cannot_log_is_one_line_and_exit_2(tmp_path, request, command):
+    # rcl creates ~/.ros/log at init; under a HOME that is a file it cannot, and rclpy
+    # raised an RCLError traceback there.
+    home = _write(tmp_path / 'home', '')
+    env = {k: v for k, v in os.environ.items() if k not in ('ROS_LOG_DIR', 'ROS_HOME')}
+    env.update(HOME=str(home), MPLCONFIGDIR=str(tmp_path))
+    proc = subprocess.run([str(BIN / command[0]), *command[1:], *(
+        ['--out', str(tmp_path / 'runs')] if command[0] == 'nfmr-run' else [])],
+        capture_output=True, text=True, timeout=60, env=env,
+        cwd=request.config.rootpath / 'config')
+    assert 'Traceback' not in proc.stderr + proc.stdout, proc.stderr
+    assert proc.returncode == 2, proc.stderr
+    lines = _ours(proc.stderr)
+    assert len(lines) == 1 and f'{home}/.ros/log' in lines[0], proc.stderr
+    assert not (tmp_path / 'runs').exists()  # refused before any work
+
+
+def test_the_ros_log_folder_is_found_as_rcl_finds_it():
+    assert ros_log_folder({'HOME': '/h'}) == Path('/h/.ros/log')
+    assert ros_log_folder({'HOME': '/h', 'ROS_HOME': '~/r'}) == Path('/h/r/log')
+    assert ros_log_folder({'HOME': '/h', 'ROS_HOME': '/r', 'ROS_LOG_DIR': '/l'}) == Path('/l')
+    assert ros_log_folder({'HOME': '/h', 'ROS_LOG_DIR': ''}) == Path('/h/.ros/log')

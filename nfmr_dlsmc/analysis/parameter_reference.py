@@ -25,9 +25,10 @@ once, in the schema of its config class
 descriptors, the validation, the live-set rules and these tables derive from it.
 `ros2 param describe /controller <name>` (or `/sim`) gives the same description, unit and
 rule, and a numeric range for a rule that is an interval (`> 0` is shown as 0 to inf, whose
-end 0 the rule still refuses), as rqt_reconfigure shows it. Integers are accepted for floating-point parameters. A parameter marked live can be
-changed while the node runs (`ros2 param set`): the change is validated like a parameter
-file and applied at the next tick or physics step, or refused with the reason; the others
+end 0 the rule still refuses), as rqt_reconfigure shows it. Integers are accepted for
+floating-point parameters. A parameter marked live can be changed while the node runs
+(`ros2 param set`): the change is validated like a parameter file and applied at the next
+tick or physics step, or refused with the reason; the others
 are read-only. What the nodes do with them: [nodes.md](nodes.md).
 """
 

@@ -194,6 +194,42 @@ def check_writable(path: Path, option: str, directory: bool = False) -> None:
         raise UsageError(f'{option} {path}: not writable ({exc.strerror or exc})') from None
 
 
+def ros_log_folder(environ) -> Path:
+    """
+    Return the folder where rcl's logging writes, as rcl_logging finds it.
+
+    ``ROS_LOG_DIR`` when set and not empty, else ``ROS_HOME/log``, else ``~/.ros/log``
+    (``~`` expanded in each, from ``HOME``).
+    """
+    home = environ.get('HOME', '~')
+    expand = (lambda text: home + text[1:] if text.startswith('~') else text)
+    if environ.get('ROS_LOG_DIR'):
+        return Path(expand(environ['ROS_LOG_DIR']))
+    if environ.get('ROS_HOME'):
+        return Path(expand(environ['ROS_HOME'])) / 'log'
+    return Path(home) / '.ros' / 'log'
+
+
+def check_ros_log_folder(environ=None) -> None:
+    """
+    Refuse, before any work, to start ROS where rcl cannot create its log folder.
+
+    rclpy's init (and so every node) fails there with an ``RCLError``.
+
+    Raises
+    ------
+    UsageError
+        The folder cannot be written: the message names it and the variable that moves it.
+
+    """
+    folder = ros_log_folder(os.environ if environ is None else environ)
+    try:
+        check_writable(folder, 'the ROS log folder', directory=True)
+    except UsageError as exc:
+        raise UsageError(f'{exc}; ROS cannot start without it: set ROS_LOG_DIR to a folder '
+                         'you can write') from None
+
+
 def add_output_file(parser: argparse.ArgumentParser, name: str, what: str) -> None:
     """
     Add ``--out`` (default ``name`` here) and ``--force`` to write over a shipped file.

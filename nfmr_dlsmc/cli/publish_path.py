@@ -8,7 +8,12 @@ YAML); a file that makes no path ends here, naming its line. The publishing itse
 
 import sys
 
-from nfmr_dlsmc.cli.common import OneLineParser, positive_number, run_command
+from nfmr_dlsmc.cli.common import (
+    check_ros_log_folder,
+    OneLineParser,
+    positive_number,
+    run_command,
+)
 from nfmr_dlsmc.runtime.params import path_file
 from nfmr_dlsmc.runtime.path_files import load_path, load_path_trajectory
 
@@ -48,6 +53,7 @@ def _run(args) -> int:
     file = path_file(args.file)
     load_path_trajectory(file)  # a file that makes no path fails here, naming its line
     points = load_path(file)
+    check_ros_log_folder()
     problem = publish_path(points, PublishOptions(args.topic, args.frame, args.timeout))
     if problem:
         print(f'nfmr-publish-path: {problem}', file=sys.stderr)

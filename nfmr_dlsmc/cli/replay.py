@@ -9,7 +9,7 @@ import math
 from pathlib import Path
 import sys
 
-from nfmr_dlsmc.cli.common import OneLineParser, run_command, UsageError
+from nfmr_dlsmc.cli.common import check_ros_log_folder, OneLineParser, run_command, UsageError
 from nfmr_dlsmc.ros.replay import replay, ReplayOptions
 
 
@@ -67,6 +67,7 @@ def _run(args) -> int:
         raise UsageError(f'--wait-for-subscribers must be >= 0, got {args.wait_for_subscribers}')
     if args.start_offset < 0.0:
         raise UsageError(f'--start-offset must be >= 0, got {args.start_offset}')
+    check_ros_log_folder()
     return replay(ReplayOptions(**vars(args)))
 
 

@@ -9,7 +9,13 @@ import math
 from pathlib import Path
 import sys
 
-from nfmr_dlsmc.cli.common import check_writable, OneLineParser, run_command, UsageError
+from nfmr_dlsmc.cli.common import (
+    check_ros_log_folder,
+    check_writable,
+    OneLineParser,
+    run_command,
+    UsageError,
+)
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.ros.launcher import run, RunOptions
@@ -74,6 +80,7 @@ def _run(args) -> int:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:
         raise UsageError('--animate draws the run from its bag: drop --no-record')
+    check_ros_log_folder()
     check_writable(args.out, '--out', directory=True)
     return run(RunOptions(**vars(args)))
 
