@@ -31,6 +31,7 @@ from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
+from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.node_main import StopRequest
@@ -482,11 +483,10 @@ def _robot_mismatch(params, settings) -> str | None:
                 f'{params.steering.j2:g}) but sim steering (j1, j2) = ({mode.j1:g}, '
                 f'{mode.j2:g}): they must match')
     chassis, geometry = settings.world.chassis, params.geometry
-    for name in ('wheelbase', 'track', 'wheel_radius'):
-        ours, sims = getattr(geometry, name), getattr(chassis, name)
-        if abs(ours - sims) > 1e-9:
-            return (f'controller geometry.{name} = {ours:g} m but sim chassis.{name} = '
-                    f'{sims:g} m: they must match')
+    name = geometry_mismatch(geometry, chassis)
+    if name is not None:
+        return (f'controller geometry.{name} = {getattr(geometry, name):g} m but sim '
+                f'chassis.{name} = {getattr(chassis, name):g} m: they must match')
     return None
 
 
