@@ -24,6 +24,15 @@ import time
 
 from lifecycle_msgs.srv import ChangeState, GetState
 from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN, plant_run
+from nfmr_dlsmc.analysis.run_metrics import (
+    last_segment,
+    loop_figures,
+    metrics_table,
+    state_metrics,
+    STEER_FIELDS,
+    with_ground_truth,
+)
+from nfmr_dlsmc.analysis.run_plots import plot_runs
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.arrival import with_arrival
@@ -40,17 +49,12 @@ from nfmr_dlsmc.ros.run_analysis import (
     animate_bag,
     DIAGNOSTICS_TOPIC,
     GROUND_TRUTH_TOPIC,
+    ground_truth_track,
     JOINT_TOPIC,
-    last_segment,
-    loop_figures,
-    metrics_table,
-    plot_runs,
+    loop_windows,
     run_notes,
-    state_metrics,
     state_series,
-    STEER_FIELDS,
     steer_joint_rates,
-    with_ground_truth,
 )
 from nfmr_dlsmc.runtime.params import (
     controller_params,
@@ -679,7 +683,7 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
     contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC,
                                          DIAGNOSTICS_TOPIC])
     state, skipped = state_series(contents)
-    series = with_ground_truth(state, contents)
+    series = with_ground_truth(state, ground_truth_track(contents))
     _, segments = last_segment(series)
     for note in run_notes(skipped, segments):
         print(f'nfmr-run: warning: {note}', file=sys.stderr)
@@ -707,7 +711,8 @@ def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
-    report_timing(run_timing(real_time_factor, loop_figures(contents), run_dir / 'sim.log'),
+    report_timing(run_timing(real_time_factor, loop_figures(loop_windows(contents)),
+                             run_dir / 'sim.log'),
                   run_dir)
     if options.animate:
         _animate(bag_dir, run_dir / 'run.gif')

@@ -1,19 +1,17 @@
 """
-Metrics, plots and animations of recorded runs.
+Recorded runs decoded into series, and animations of them.
 
-The metrics and plots come from the ``controller_state`` topic; :func:`animate_bag` draws
-the robot from above as it was recorded: P's true pose, its measured steer angles and the
-reference point.
+The series of the metrics come from the ``controller_state`` topic
+(:mod:`nfmr_dlsmc.analysis.run_metrics` measures them); :func:`animate_bag` draws the robot
+from above as it was recorded: P's true pose, its measured steer angles and the reference
+point.
 """
 
-from dataclasses import replace
 import math
 from pathlib import Path
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-import matplotlib
-import matplotlib.pyplot as plt
 from nav_msgs.msg import Odometry, Path as PathMessage
 from nfmr_dlsmc.analysis.animation import (
     animate_run,
@@ -24,16 +22,6 @@ from nfmr_dlsmc.analysis.animation import (
 from nfmr_dlsmc.bag.reader import BagContents, BagError, read_bag
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.footprint import Footprint
-from nfmr_dlsmc.core.metrics import (
-    ARRIVAL_ROWS,
-    format_metric,
-    HOLD_FROM,
-    HOLD_ROWS,
-    metric_rows,
-    sample_durations,
-    tracking_metrics,
-    TrackingMetrics,
-)
 from nfmr_dlsmc.core.steering import RobotGeometry, WHEEL_NAMES
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS
@@ -56,8 +44,6 @@ ANIMATION_TOPICS = (STATE_TOPIC, JOINT_TOPIC, GROUND_TRUTH_TOPIC, ODOM_TOPIC, MA
 PATH_STEP = 0.05
 #: The steer joints of ``/joint_states``, FL FR RL RR.
 STEER_JOINTS = tuple(f'{wheel}_steer' for wheel in WHEEL_NAMES)
-#: The steer angle fields of the state, FL FR RL RR.
-STEER_FIELDS = ('steer_fl', 'steer_fr', 'steer_rl', 'steer_rr')
 #: The state fields the metrics need.
 NEEDED_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_d', 'theta_r', 'theta_e', 'v',
                  'omega', 'stopped')
@@ -108,21 +94,6 @@ def state_series(contents: BagContents) -> tuple[dict, int]:
     return {name: rows[:, i] for i, name in enumerate(names)}, len(messages) - len(rows)
 
 
-def last_segment(series: dict) -> tuple[dict, int]:
-    """
-    Return the ticks of the last tracking segment, and how many segments the series has.
-
-    Trajectory time ``t`` starts over when tracking does (a restarted odometry source,
-    doc/design.md D10): integrals over a series whose time goes back would count time
-    backwards. A segment begins wherever ``t`` decreases.
-    """
-    t = series['t']
-    starts = np.flatnonzero(np.diff(t) < 0.0) + 1
-    if not len(starts):
-        return series, 1
-    return {k: v[starts[-1]:] for k, v in series.items()}, len(starts) + 1
-
-
 def run_notes(skipped: int, segments: int) -> list[str]:
     """Return what a reader of a run's figures must know of its state messages."""
     notes = []
@@ -135,12 +106,13 @@ def run_notes(skipped: int, segments: int) -> list[str]:
     return notes
 
 
-def loop_figures(contents: BagContents) -> dict | None:
+def loop_windows(contents: BagContents) -> list[dict]:
     """
-    Return the controller loop's figures over a run from its ``/diagnostics`` windows.
+    Return the controller loop's diagnostics windows of a run, each its numbers by key.
 
-    ``rate_hz`` (ticks over the windows' time), ``period_p99_ms`` (the median of the windows'
-    p99), ``overruns`` (their sum) and ``windows``; None when the bag has none.
+    From ``/diagnostics``: each status with a ``rate_hz`` and ticks counted (``ticks``,
+    ``rate_hz``, ``period_p99_ms``, ``overruns``, ...); values that are text, such as the
+    lifecycle state, are left out.
     """
     windows = []
     for message in contents.of(DIAGNOSTICS_TOPIC):
@@ -153,28 +125,19 @@ def loop_figures(contents: BagContents) -> dict | None:
                     continue  # text, such as the lifecycle state
             if 'rate_hz' in values and values.get('ticks', 0.0) > 0.0:
                 windows.append(values)
-    if not windows:
-        return None
-    ticks = sum(w['ticks'] for w in windows)
-    return {'rate_hz': ticks / sum(w['ticks'] / w['rate_hz'] for w in windows),
-            'period_p99_ms': float(np.median([w['period_p99_ms'] for w in windows])),
-            'overruns': sum(w['overruns'] for w in windows), 'windows': len(windows)}
+    return windows
 
 
-def with_ground_truth(series: dict, contents: BagContents) -> dict:
+def ground_truth_track(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
     """
-    Return ``series`` with the true pose of P at each tick in place of the controller's own.
+    Return the true pose of P the bag records: (stamps [s], poses (N, 3)), or None.
 
-    The controller's pose is what it measured or estimated (noisy, late odometry); the
-    metrics are of the truth. ``/ground_truth`` (sampled more sparsely) is interpolated to
-    each tick's ``control_time``; ticks outside it are dropped. The controller's pose stays
-    as ``x_seen``, ``y_seen``, ``theta_seen`` (present only when the truth was used). Bags
-    without ground truth or ``control_time`` (a real robot, older bags), or whose truth is
-    on another clock than the ticks, keep the controller's pose.
+    From ``/ground_truth`` (the simulator's), in stamp order: x [m], y [m] and yaw [rad],
+    unwrapped; None if the bag has none.
     """
     truth = contents.of(GROUND_TRUTH_TOPIC)
-    if not truth or 'control_time' not in series:
-        return series
+    if not truth:
+        return None
     odom = [deserialize_message(m.data, Odometry) for m in truth]
     stamps = np.array([o.header.stamp.sec + o.header.stamp.nanosec * 1e-9 for o in odom])
     order = np.argsort(stamps, kind='stable')
@@ -183,16 +146,7 @@ def with_ground_truth(series: dict, contents: BagContents) -> dict:
     y = np.array([o.pose.pose.position.y for o in odom])[order]
     q = [o.pose.pose.orientation for o in odom]
     yaw = np.unwrap(np.array([yaw_from_quaternion(r.x, r.y, r.z, r.w) for r in q])[order])
-    at = series['control_time']
-    inside = (at >= stamps[0]) & (at <= stamps[-1])
-    if np.count_nonzero(inside) < 0.9 * len(at):
-        return series  # not on the same clock
-    kept = {k: v[inside] for k, v in series.items()}
-    at = at[inside]
-    kept.update(x_seen=kept['x'], y_seen=kept['y'], theta_seen=kept['theta'],
-                x=np.interp(at, stamps, x), y=np.interp(at, stamps, y),
-                theta=np.interp(at, stamps, yaw))
-    return kept
+    return stamps, np.column_stack([x, y, yaw])
 
 
 def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
@@ -232,146 +186,6 @@ def path_goal(contents: BagContents, series: dict) -> tuple | None:
     pose = poses[-1].pose
     q = pose.orientation
     return pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w)
-
-
-def state_metrics(series: dict, hold_from: float = HOLD_FROM,
-                  joint_rates: tuple | None = None, goal=None) -> TrackingMetrics:
-    """
-    Return the :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the ticks of a run.
-
-    Each tick is weighted by its own duration; ticks where safety stopped the robot are
-    left out, and so are the tracking segments before the last (:func:`last_segment`). The
-    hold figures use the state's saturation flags and steer angles (bags recorded before
-    the state carried them have no steer figure) and, with ``joint_rates`` from
-    :func:`steer_joint_rates`, the measured steer joint rates stamped at or after
-    ``hold_from`` (sim time, which starts with trajectory time within a step). With
-    ``goal`` (a path's last pose) and the state's ``arrival``, the arrival figures.
-    """
-    series, _ = last_segment(series)
-    keep = series['stopped'] == 0.0
-    s = {k: v[keep] for k, v in series.items()}
-    steer = (np.column_stack([s[name] for name in STEER_FIELDS])
-             if all(name in s for name in STEER_FIELDS) else None)
-    metrics = tracking_metrics(s['t'], s['x'], s['y'], s['theta'], s['x_d'], s['y_d'],
-                               s['theta_d'], s['theta_r'], s['v'], s['omega'],
-                               sample_durations(s['t']), hold_from, s.get('omega_saturated'),
-                               steer, None, s.get('arrival') if goal is not None else None,
-                               goal)
-    if joint_rates is not None:
-        stamps, rates = joint_rates
-        after = stamps >= hold_from
-        if np.any(after):
-            metrics = replace(metrics, hold_steer_joint_rate_max=float(np.abs(rates[after]).max()))
-    return metrics
-
-
-def plot_runs(runs: list, out_dir: Path) -> list[Path]:
-    """
-    Overlay runs: trajectory, distance error, heading error and inputs, as PNGs.
-
-    Parameters
-    ----------
-    runs : list of (label, series)
-        Each series a dict with at least t, x, y, x_d, y_d, theta_e, v, omega; the
-        reference is drawn from the first run. Series with steer_fl ... steer_rr add
-        ``steering.png``.
-    out_dir : Path
-        Where the PNGs go (created if missing).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-
-    """
-    matplotlib.use('Agg')
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    colours = plt.rcParams['axes.prop_cycle'].by_key()['color']
-    styled = [(label, s, colours[i % len(colours)], '-' if i == 0 else '--')
-              for i, (label, s) in enumerate(runs)]
-    paths = []
-
-    def save(fig, name):
-        path = out_dir / name
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
-
-    first = runs[0][1]
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.plot(first['x_d'], first['y_d'], color='0.6', lw=3, label='reference')
-    for label, s, colour, style in styled:
-        ax.plot(s['x'], s['y'], style, color=colour, label=label)
-    ax.set(xlabel='x [m]', ylabel='y [m]', title='Trajectory of P')
-    ax.set_aspect('equal', adjustable='datalim')
-    ax.legend()
-    save(fig, 'trajectory.png')
-
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for label, s, colour, style in styled:
-        d = np.hypot(s['x'] - s['x_d'], s['y'] - s['y_d'])
-        axes[0].semilogy(s['t'], np.maximum(d, 1e-9), style, color=colour, label=label)
-        axes[1].plot(s['t'], s['theta_e'], style, color=colour, label=label)
-    axes[0].axhline(1e-3, color='k', lw=0.8, ls=':', label='1 mm')
-    axes[0].set_ylabel('distance error [m]')
-    axes[1].set(ylabel='theta_e [rad]', xlabel='t [s]')
-    for ax in axes:
-        ax.legend()
-    save(fig, 'errors.png')
-
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for label, s, colour, style in styled:
-        axes[0].plot(s['t'], s['v'], style, color=colour, label=label)
-        axes[1].plot(s['t'], s['omega'], style, color=colour, label=label, lw=0.6)
-    axes[0].set_ylabel('v [m/s]')
-    axes[1].set(ylabel='omega [rad/s]', xlabel='t [s]')
-    for ax in axes:
-        ax.legend()
-    save(fig, 'inputs.png')
-
-    with_steer = [(label, s) for label, s in runs if all(n in s for n in STEER_FIELDS)]
-    if with_steer:
-        fig, axes = plt.subplots(len(with_steer), 1, figsize=(8, 3 * len(with_steer)),
-                                 sharex=True, squeeze=False)
-        for ax, (label, s) in zip(axes[:, 0], with_steer):
-            for name in STEER_FIELDS:
-                ax.plot(s['t'], s[name], lw=0.8, label=name.removeprefix('steer_').upper())
-            ax.set(ylabel='steer angle [rad]', title=f'Commanded steer angles: {label}')
-            ax.legend(ncol=4)
-        axes[-1, 0].set_xlabel('t [s]')
-        save(fig, 'steering.png')
-    return paths
-
-
-#: Rows of the metrics table: (label, TrackingMetrics field).
-TABLE_ROWS = metric_rows(('iae', 'ise', 'std', 't_conv', 'final_distance',
-                          'max_abs_theta_e_after_conv', 'theta_e_iae', 'max_v',
-                          'max_abs_omega', 't_conv_1cm')) + HOLD_ROWS
-
-
-def metrics_table(columns: list) -> str:
-    """
-    Return a text table, one column per (label, TrackingMetrics).
-
-    The hold rows cover t >= the first column's ``hold_from``.
-    """
-    width = max([12] + [len(label) for label, _ in columns])
-    hold_from = columns[0][1].hold_from if columns else HOLD_FROM
-    lines = [f"{'metric':<40}" + ''.join(f' {label:>{width}}' for label, _ in columns),
-             f'(hold: after {hold_from:g} s)']
-    for row, key in TABLE_ROWS:
-        cells = [f' {format_metric(getattr(metrics, key)):>{width}}' for _, metrics in columns]
-        lines.append(f'{row:<40}' + ''.join(cells))
-    if any(metrics.arrival for _, metrics in columns):  # a path: how each run ended
-        lines.append(f"{'end of the path':<40}" + ''.join(
-            f" {metrics.arrival or '—':>{width}}" for _, metrics in columns))
-        for row, key in ARRIVAL_ROWS:
-            cells = [f' {format_metric(getattr(metrics, key)):>{width}}'
-                     for _, metrics in columns]
-            lines.append(f'{row:<40}' + ''.join(cells))
-    return '\n'.join(lines)
 
 
 def _topics_note(contents: BagContents) -> str:
