@@ -2,7 +2,7 @@
 ``nfmr-analyze``: the paper's metrics of recorded runs, compared side by side.
 
 With ``--animate`` it also draws one run as a GIF or MP4
-(:func:`~nfmr_dlsmc.ros.run_analysis.animate_contents`).
+(:func:`~nfmr_dlsmc.ros.bag_animation.animate_contents`).
 """
 
 import argparse
@@ -29,9 +29,9 @@ from nfmr_dlsmc.cli.common import (
     UsageError,
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM
-from nfmr_dlsmc.ros.run_analysis import (
-    animate_contents,
-    ANIMATION_TOPICS,
+from nfmr_dlsmc.ros.animation_tracks import ANIMATION_TOPICS
+from nfmr_dlsmc.ros.bag_animation import animate_contents
+from nfmr_dlsmc.ros.run_series import (
     GROUND_TRUTH_TOPIC,
     ground_truth_track,
     JOINT_TOPIC,

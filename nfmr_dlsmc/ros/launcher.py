@@ -43,10 +43,10 @@ from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.ros.bag_animation import animate_bag
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
-from nfmr_dlsmc.ros.run_analysis import (
-    animate_bag,
+from nfmr_dlsmc.ros.run_series import (
     DIAGNOSTICS_TOPIC,
     GROUND_TRUTH_TOPIC,
     ground_truth_track,
