@@ -17,8 +17,6 @@ import math
 import os
 from pathlib import Path
 import re
-import signal
-import subprocess
 import sys
 import time
 
@@ -37,7 +35,6 @@ from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
-from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
@@ -45,6 +42,12 @@ from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.bag_animation import animate_bag
 from nfmr_dlsmc.ros.node_main import StopRequest
+from nfmr_dlsmc.ros.node_processes import (
+    check_children,
+    RunError,
+    start_child,
+    stop_children,
+)
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_series import (
     DIAGNOSTICS_TOPIC,
@@ -64,7 +67,6 @@ from nfmr_dlsmc.runtime.params import (
     path_file,
     path_values,
 )
-from nfmr_dlsmc.runtime.parent_death import die_with_parent
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
@@ -88,16 +90,11 @@ RUN_TOPICS = {
 }
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
-STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
 STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
 TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
 ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
-
-
-class RunError(NfmrError, RuntimeError):
-    """A run that could not complete (a child died); the message says which and why."""
 
 
 @dataclass(frozen=True)
@@ -240,11 +237,10 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     clock = _ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
-        children = [_start_child('sim', 'nfmr_sim.ros.sim_node',
-                                 _sim_args(config, options, settings.initial_pose), run_dir),
-                    _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
-                                 _controller_args(config, options, settings.world),
-                                 run_dir)]
+        children = [start_child('sim', 'nfmr_sim.ros.sim_node',
+                                _sim_args(config, options, settings.initial_pose), run_dir),
+                    start_child('controller', 'nfmr_dlsmc.ros.controller_node',
+                                _controller_args(config, options, settings.world), run_dir)]
         controller = _ControllerLifecycle(manager, clock, children, stop)
         # The sim starts stepping once the controller subscribes to odometry: when active.
         controller.wait_until_up()
@@ -258,7 +254,7 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         # that ended as planned ends without a safety stop.
         clock.spin(0.3)
         controller.change('deactivate')  # returns once its telemetry is acknowledged
-        _stop_children(children[1:])
+        stop_children(children[1:])
     except KeyboardInterrupt:
         status = 130
         print('\ninterrupted: stopping the run', file=sys.stderr)
@@ -266,10 +262,10 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         status = 1
         print(f'\nnfmr-run: error: {exc}', file=sys.stderr)
     finally:
-        _stop_children(children[:1])  # the sim first: no new steps
+        stop_children(children[:1])  # the sim first: no new steps
         if any(child.process.poll() is None for child in children[1:]):
             clock.spin(1.0)  # deliver what the controller published for the last steps
-        _stop_children(children[1:])
+        stop_children(children[1:])
         if recorder is not None:
             clock.drain()
             recorder.close()
@@ -346,20 +342,6 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
     return [*args, '-p', 'tick_source:=sim_clock']
 
 
-@dataclass
-class _Child:
-    """A started node process and its log file."""
-
-    name: str
-    process: subprocess.Popen
-    log: Path
-
-    def tail(self, lines: int = 15) -> str:
-        """Return the last lines of its log, indented."""
-        text = self.log.read_text(errors='replace').splitlines()
-        return '\n'.join('    ' + line for line in text[-lines:])
-
-
 def _new_run_dir(out: Path, config: Path) -> Path:
     """Create ``<out>/<YYYYmmdd-HHMMSS>_<config stem>``, with a suffix rather than reuse."""
     base = out / f"{time.strftime('%Y%m%d-%H%M%S')}_{config.stem}"
@@ -368,41 +350,6 @@ def _new_run_dir(out: Path, config: Path) -> Path:
         path, n = Path(f'{base}_{n}'), n + 1
     path.mkdir(parents=True)
     return path
-
-
-def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
-    """
-    Start ``python -m module args`` in its own session, logging to ``<run_dir>/<name>.log``.
-
-    A terminal's Ctrl-C then reaches only the launcher, which stops the children in order.
-    """
-    log = run_dir / f'{name}.log'
-    env = dict(os.environ, PYTHONUNBUFFERED='1')
-    with log.open('w') as fh:
-        process = subprocess.Popen([sys.executable, '-m', module, *args], stdout=fh,
-                                   stderr=subprocess.STDOUT, env=env, start_new_session=True,
-                                   preexec_fn=die_with_parent)
-    return _Child(name, process, log)
-
-
-def _stop_children(children: list) -> None:
-    """
-    SIGINT every live child, then kill what is still alive after STOP_TIMEOUT.
-
-    A stopped child (SIGSTOP: a stalled run) is continued after its SIGINT, so that it
-    ends at once as the others do instead of being killed after STOP_TIMEOUT.
-    """
-    for child in children:
-        if child.process.poll() is None:
-            child.process.send_signal(signal.SIGINT)
-            child.process.send_signal(signal.SIGCONT)
-    deadline = time.monotonic() + STOP_TIMEOUT
-    for child in children:
-        try:
-            child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            child.process.kill()
-            child.process.wait()
 
 
 class _ClockWatch:
@@ -521,7 +468,7 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     while True:
         clock.spin(0.05)
         stop.check()
-        _check_children(children)
+        check_children(children)
         if clock.recorder is not None and clock.recorder.failure:
             raise RunError(f'{clock.recorder.failure}; the run is stopped (nfmr-reindex '
                            'recovers the chunks written)')
@@ -558,23 +505,6 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     return (sim_t - first[1]) / (now - first[0])
 
 
-def _check_children(children: list) -> None:
-    """
-    Raise if a child exited.
-
-    Raises
-    ------
-    RunError
-        Naming the child, its exit code and the last lines of its log.
-
-    """
-    for child in children:
-        code = child.process.poll()
-        if code is not None:
-            raise RunError(f'{child.name} exited with code {code}; last lines of '
-                           f'{child.log}:\n{child.tail()}')
-
-
 class _ControllerLifecycle:
     """
     The controller's lifecycle transitions, asked for over its services.
@@ -585,7 +515,7 @@ class _ControllerLifecycle:
         The launcher's node the service clients belong to (spun by ``clock``).
     clock : _ClockWatch
         Spins the launcher's nodes while waiting.
-    children : list of _Child
+    children : list of Child
         The sim, then the controller: a child that exits meanwhile ends the wait.
     stop : StopRequest
         Ctrl-C and SIGTERM end the wait.
@@ -615,7 +545,7 @@ class _ControllerLifecycle:
         end = time.monotonic() + timeout
         while not done():
             self._stop.check()
-            _check_children(self._children)
+            check_children(self._children)
             if time.monotonic() > end:
                 return False
             self._clock.spin(0.02)
