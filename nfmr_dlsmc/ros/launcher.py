@@ -20,7 +20,6 @@ import re
 import sys
 import time
 
-from lifecycle_msgs.srv import ChangeState, GetState
 from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN, plant_run
 from nfmr_dlsmc.analysis.run_metrics import (
     last_segment,
@@ -41,6 +40,8 @@ from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.bag_animation import animate_bag
+from nfmr_dlsmc.ros.clock_watch import ClockWatch
+from nfmr_dlsmc.ros.lifecycle_client import ControllerLifecycle, STARTUP_TIMEOUT
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.node_processes import (
     check_children,
@@ -72,9 +73,7 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from rosgraph_msgs.msg import Clock
 
 #: Topics of a run and their types (recorded from the first message).
 RUN_TOPICS = {
@@ -90,10 +89,7 @@ RUN_TOPICS = {
 }
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
-STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
-TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
-DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
 ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
 
 
@@ -234,14 +230,14 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     children = []
     status = 0
     real_time_factor = math.nan
-    clock = _ClockWatch(recorder, executor, manager)
+    clock = ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
         children = [start_child('sim', 'nfmr_sim.ros.sim_node',
                                 _sim_args(config, options, settings.initial_pose), run_dir),
                     start_child('controller', 'nfmr_dlsmc.ros.controller_node',
                                 _controller_args(config, options, settings.world), run_dir)]
-        controller = _ControllerLifecycle(manager, clock, children, stop)
+        controller = ControllerLifecycle(manager, clock, children, stop)
         # The sim starts stepping once the controller subscribes to odometry: when active.
         controller.wait_until_up()
         controller.change('configure')
@@ -352,60 +348,6 @@ def _new_run_dir(out: Path, config: Path) -> Path:
     return path
 
 
-class _ClockWatch:
-    """Spins the launcher's nodes and tracks simulated time from /clock (recording or not)."""
-
-    def __init__(self, recorder, executor, node):
-        self.recorder = recorder
-        self.executor = executor
-        self.node = node
-        self.started = time.monotonic()
-        self._clock_ns = 0
-        self.backwards = 0  # /clock messages earlier than the one before
-        node.create_subscription(Clock, '/clock', self._on_clock,
-                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
-
-    def _on_clock(self, msg: Clock) -> None:
-        ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
-        if ns < self._clock_ns:
-            self.backwards += 1
-        self._clock_ns = ns
-
-    def foreign_source(self) -> str | None:
-        """Return what shows that another ROS source feeds this run's topics, or None."""
-        for topic in ('/clock', '/controller_state', '/odom'):
-            count = self.node.count_publishers(topic)
-            if count > 1:
-                return f'{count} publishers on {topic}, where the run has one'
-        if self.backwards:
-            return f'/clock went back {self.backwards} times'
-        return None
-
-    def spin(self, seconds: float) -> None:
-        """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
-
-    @property
-    def sim_time(self) -> float:
-        """Return the simulated time of the last /clock message [s]."""
-        return self._clock_ns * 1e-9
-
-    def drain(self, quiet: float = 0.5, longest: float = DRAIN_TIMEOUT) -> None:
-        """
-        Spin until no message arrived for ``quiet`` seconds, or ``longest`` seconds passed.
-
-        The bound: a source other than the run's children may go on publishing.
-        """
-        last = -1
-        end = time.monotonic() + longest
-        while last != self.recorder.received + self.recorder.pending() \
-                and time.monotonic() < end:
-            last = self.recorder.received + self.recorder.pending()
-            self.spin(quiet)
-
-
 def _check_latency(latency: float, odom_timeout: float) -> None:
     """
     Refuse odometry later than the controller's odometry timeout.
@@ -441,7 +383,7 @@ def _robot_mismatch(params, settings) -> str | None:
     return None
 
 
-def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
+def _wait_for_run(children: list, clock: ClockWatch, duration: float,
                   stall_timeout: float, stop: StopRequest, step: float) -> float:
     """
     Spin until the sim reaches ``duration``, showing progress.
@@ -503,103 +445,6 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     if first is None or now <= first[0]:
         return math.nan
     return (sim_t - first[1]) / (now - first[0])
-
-
-class _ControllerLifecycle:
-    """
-    The controller's lifecycle transitions, asked for over its services.
-
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The launcher's node the service clients belong to (spun by ``clock``).
-    clock : _ClockWatch
-        Spins the launcher's nodes while waiting.
-    children : list of Child
-        The sim, then the controller: a child that exits meanwhile ends the wait.
-    stop : StopRequest
-        Ctrl-C and SIGTERM end the wait.
-
-    """
-
-    def __init__(self, node, clock: _ClockWatch, children: list, stop: StopRequest):
-        self._node = node
-        self._clock = clock
-        self._children = children
-        self._stop = stop
-        self._change = node.create_client(ChangeState, '/controller/change_state')
-        self._get = node.create_client(GetState, '/controller/get_state')
-
-    def _wait(self, done, timeout: float) -> bool:
-        """
-        Spin until ``done()``, at most ``timeout`` [s]; return ``done()``.
-
-        Raises
-        ------
-        RunError
-            A child exited.
-        KeyboardInterrupt
-            A stop was requested.
-
-        """
-        end = time.monotonic() + timeout
-        while not done():
-            self._stop.check()
-            check_children(self._children)
-            if time.monotonic() > end:
-                return False
-            self._clock.spin(0.02)
-        return True
-
-    def wait_until_up(self) -> None:
-        """
-        Wait until the controller answers on its lifecycle services and the sim publishes.
-
-        A request sent while the controller's answer cannot reach this node yet (DDS is
-        still matching them) is lost: ``get_state``, which changes nothing, is asked until
-        it is answered, so that no transition request is lost.
-
-        Raises
-        ------
-        RunError
-            A child exited, or they were not up within STARTUP_TIMEOUT.
-
-        """
-        deadline = time.monotonic() + STARTUP_TIMEOUT
-        ready = self._wait(lambda: self._get.service_is_ready() and
-                           self._change.service_is_ready() and
-                           self._node.count_publishers('/odom') > 0, STARTUP_TIMEOUT)
-        while ready:
-            future = self._get.call_async(GetState.Request())
-            if self._wait(future.done, 1.0):
-                return
-            self._get.remove_pending_request(future)
-            ready = time.monotonic() < deadline
-        raise RunError(f'the controller and the sim were not up within {STARTUP_TIMEOUT:g} s '
-                       '(the controller answering its lifecycle services, the sim publishing '
-                       'odometry)')
-
-    def change(self, transition: str) -> None:
-        """
-        Ask the controller for ``transition`` (``configure``, ``activate``, ...).
-
-        Raises
-        ------
-        RunError
-            Naming the transition when it failed, with the controller's log tail, or when
-            no answer came within TRANSITION_TIMEOUT.
-
-        """
-        request = ChangeState.Request()
-        request.transition.label = transition
-        future = self._change.call_async(request)
-        if not self._wait(future.done, TRANSITION_TIMEOUT):
-            raise RunError(f"controller transition '{transition}' got no answer within "
-                           f'{TRANSITION_TIMEOUT:g} s')
-        if not future.result().success:
-            controller = self._children[1]
-            raise RunError(f"controller transition '{transition}' failed; last lines of "
-                           f'{controller.log}:\n{controller.tail()}')
 
 
 def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
