@@ -9,37 +9,26 @@ prints the paper's metrics and those of holding the path next to the same scenar
 this process on the pybullet chassis (no ROS) and on the kinematic model, and writes
 plots. The last line printed is the bag directory. The command line is
 :mod:`nfmr_dlsmc.cli.run`.
+
+This module orders the run. The children are started and stopped by
+:mod:`nfmr_dlsmc.ros.node_processes`, the controller's transitions asked for by
+:mod:`nfmr_dlsmc.ros.lifecycle_client`, the nodes spun and /clock followed by
+:mod:`nfmr_dlsmc.ros.clock_watch`, and the end reported by :mod:`nfmr_dlsmc.ros.run_report`.
 """
 
 from dataclasses import dataclass, replace
-import json
 import math
 import os
 from pathlib import Path
-import re
 import sys
 import time
 
-from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN, plant_run
-from nfmr_dlsmc.analysis.run_metrics import (
-    last_segment,
-    loop_figures,
-    metrics_table,
-    state_metrics,
-    STEER_FIELDS,
-    with_ground_truth,
-)
-from nfmr_dlsmc.analysis.run_plots import plot_runs
-from nfmr_dlsmc.bag.reader import read_bag
+from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.bag.writer import BagWriter
-from nfmr_dlsmc.core.arrival import with_arrival
-from nfmr_dlsmc.core.dlsmc import DlsmcController
-from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
-from nfmr_dlsmc.ros.bag_animation import animate_bag
 from nfmr_dlsmc.ros.clock_watch import ClockWatch
 from nfmr_dlsmc.ros.lifecycle_client import ControllerLifecycle, STARTUP_TIMEOUT
 from nfmr_dlsmc.ros.node_main import StopRequest
@@ -50,16 +39,7 @@ from nfmr_dlsmc.ros.node_processes import (
     stop_children,
 )
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
-from nfmr_dlsmc.ros.run_series import (
-    DIAGNOSTICS_TOPIC,
-    GROUND_TRUTH_TOPIC,
-    ground_truth_track,
-    JOINT_TOPIC,
-    loop_windows,
-    run_notes,
-    state_series,
-    steer_joint_rates,
-)
+from nfmr_dlsmc.ros.run_report import report_run, report_timing, run_timing
 from nfmr_dlsmc.runtime.params import (
     controller_params,
     load_params_file,
@@ -275,7 +255,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         rclpy.try_shutdown()
         stop.release()
     if writer is not None and status == 0:
-        _report(bag_dir, run_dir, params, settings, options, writer.counts, real_time_factor)
+        report_run(bag_dir, run_dir, params, settings, options, writer.counts,
+                   real_time_factor)
     elif status == 0:  # not recorded: the pace and the braking, without the loop's figures
         report_timing(run_timing(real_time_factor, None, run_dir / 'sim.log'), run_dir)
     if writer is not None:
@@ -445,92 +426,3 @@ def _wait_for_run(children: list, clock: ClockWatch, duration: float,
     if first is None or now <= first[0]:
         return math.nan
     return (sim_t - first[1]) / (now - first[0])
-
-
-def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
-            real_time_factor: float) -> None:
-    """
-    Print the metrics table and write plots.
-
-    The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
-    the in-process pybullet plant and the kinematic model.
-    """
-    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC,
-                                         DIAGNOSTICS_TOPIC])
-    state, skipped = state_series(contents)
-    series = with_ground_truth(state, ground_truth_track(contents))
-    _, segments = last_segment(series)
-    for note in run_notes(skipped, segments):
-        print(f'nfmr-run: warning: {note}', file=sys.stderr)
-    goal = getattr(params.trajectory, 'end_pose', None)
-    columns = [('ROS pybullet', state_metrics(series, options.hold_from,
-                                              steer_joint_rates(contents), goal))]
-    runs = [('ROS pybullet', series)]
-    if not options.no_compare:
-        print('the same scenario in this process: pybullet, then the kinematic model ...',
-              file=sys.stderr, flush=True)
-        for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
-            controller = with_arrival(DlsmcController(params.dlsmc), params.trajectory,
-                                      params.arrival)
-            sim = plant_run(plant, controller, params, params.trajectory,
-                            settings.initial_pose, options.duration, settings.world)
-            columns.append((label, simulation_metrics(sim, options.hold_from, goal)))
-            plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
-                       'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
-                       'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}
-            if sim.steer is not None:
-                plotted.update(zip(STEER_FIELDS, sim.steer.T))
-            runs.append((label, plotted))
-    plot_runs(runs, run_dir)
-    print(metrics_table(columns))
-    stopped = int(series['stopped'].sum())
-    print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
-          f'{sum(counts.values())} messages recorded; plots in {run_dir}')
-    report_timing(run_timing(real_time_factor, loop_figures(loop_windows(contents)),
-                             run_dir / 'sim.log'),
-                  run_dir)
-    if options.animate:
-        _animate(bag_dir, run_dir / 'run.gif')
-
-
-def run_timing(real_time_factor: float, loop: dict | None, sim_log: Path) -> dict:
-    """
-    Return how a run kept its timing.
-
-    ``sim_real_time_factor`` [-], ``sim_behind_s`` (the wall time the realtime sim gave up,
-    from its log; 0 if none), ``controller_loop`` (``rate_hz``, ``period_p99_ms``,
-    ``overruns``, ``windows`` from the recorded ``/diagnostics``; None without a bag) and
-    ``sim_braked`` (how often the sim braked for want of a valid command).
-    """
-    log = sim_log.read_text() if sim_log.is_file() else ''
-    braking = sum(1 for line in log.splitlines()
-                  if 'braking' in line and 'no command received yet' not in line)
-    behind = re.findall(r'slower than real time: ([0-9.]+) s behind', log)
-    return {'sim_real_time_factor': real_time_factor,
-            'sim_behind_s': float(behind[-1]) if behind else 0.0,
-            'controller_loop': loop, 'sim_braked': braking}
-
-
-def report_timing(timing: dict, run_dir: Path) -> None:
-    """Print the timing line and write it to ``timing.json`` in the run folder."""
-    parts = [f"timing: sim {timing['sim_real_time_factor']:.2f}x real time"
-             + (f" ({timing['sim_behind_s']:.3f} s behind the wall clock)"
-                if timing['sim_behind_s'] else '')]
-    loop = timing['controller_loop']
-    if loop:
-        parts.append(f"controller loop {loop['rate_hz']:.1f} Hz, period p99 "
-                     f"{loop['period_p99_ms']:.2f} ms, {loop['overruns']:.0f} overruns")
-    parts.append(f"sim braked {timing['sim_braked']} times for a missing or invalid command")
-    print('; '.join(parts))
-    (run_dir / 'timing.json').write_text(json.dumps(timing, indent=2) + '\n')
-
-
-def _animate(bag_dir: Path, out: Path) -> None:
-    """Write the animation of the run, showing progress on stderr."""
-    def progress(done, total):
-        if done == total or done % 25 == 0:
-            print(f'\ranimation: frame {done} / {total}', end='', file=sys.stderr, flush=True)
-
-    made = animate_bag(bag_dir, out, progress=progress)
-    print(f"\nanimation: {out} ({made['frames']} frames, {made['seconds']:.1f} s of output) "
-          f"in {made['wall_s']:.1f} s", file=sys.stderr)
