@@ -15,9 +15,10 @@ The sub-packages are layers; each imports only from those listed before it
 ``bag``
     MCAP writer, reader and reindexer (no rclpy);
 ``analysis``
-    the comparison study, its report and figures, the baseline gain search;
+    the comparison study, its report and figures, run metrics and plots, the baseline gain
+    search;
 ``ros``
-    the rclpy nodes, the launcher, replay and run analysis;
+    the rclpy nodes, the launcher, replay and recorded runs decoded;
 ``cli``
     the ``nfmr-*`` command lines.
 

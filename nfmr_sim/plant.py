@@ -10,12 +10,16 @@ advances one step. The result has the shape of the kinematic simulator's
 """
 
 from dataclasses import replace
-import math
 import time
 
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator
-from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.core.steering import (
+    geometry_mismatch,
+    RobotGeometry,
+    SteerMode,
+    wheel_commands,
+)
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import check_start, sample_reference, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
@@ -81,9 +85,7 @@ def simulate_pybullet(controller, trajectory, x0, duration: float,
     dt = world_config.physics_dt
     x0, n = check_start(controller, x0, duration, dt)
     chassis = world_config.chassis
-    if not (math.isclose(chassis.wheelbase, geometry.wheelbase)
-            and math.isclose(chassis.track, geometry.track)
-            and math.isclose(chassis.wheel_radius, geometry.wheel_radius)):
+    if geometry_mismatch(geometry, chassis) is not None:
         raise ParameterError('geometry', geometry, 'must match the simulated chassis '
                              f'(wheelbase {chassis.wheelbase:g} m, track {chassis.track:g} m, '
                              f'wheel radius {chassis.wheel_radius:g} m)')

@@ -1,4 +1,4 @@
-"""The animation of a recorded run: nfmr-analyze --animate and nfmr_dlsmc.ros.run_analysis."""
+"""The animation of a recorded run: nfmr-analyze --animate and nfmr_dlsmc.ros.bag_animation."""
 
 from dataclasses import astuple
 import math
@@ -8,6 +8,7 @@ import sys
 
 from builtin_interfaces.msg import Time
 from nfmr_dlsmc.analysis.animation import AnimationConfig
+from nfmr_dlsmc.analysis.animation_timing import PATH_STEP
 from nfmr_dlsmc.bag.reader import BagError, read_bag
 from nfmr_dlsmc.cli.analyze import main as analyze_main
 from nfmr_dlsmc.core.dlsmc import DlsmcController
@@ -15,13 +16,8 @@ from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.plants.kinematic import simulate
-from nfmr_dlsmc.ros.run_analysis import (
-    animate_bag,
-    animation_series,
-    ANIMATION_TOPICS,
-    PATH_STEP,
-    recorded_robot,
-)
+from nfmr_dlsmc.ros.animation_tracks import ANIMATION_TOPICS, recorded_robot
+from nfmr_dlsmc.ros.bag_animation import animate_bag, animation_series
 from nfmr_dlsmc.ros.scene import robot_markers
 import numpy as np
 from PIL import Image

@@ -4,7 +4,8 @@ The layer map of doc/design.md, checked on the sources.
 Each module of ``nfmr_dlsmc`` and ``nfmr_sim`` belongs to a layer (its sub-package); a
 layer imports only from the layers below it; ``nfmr_dlsmc`` never imports ``nfmr_sim``
 (the simulator registers itself as a plant instead); rclpy, pybullet, matplotlib and mcap
-are imported only where the map allows, and the core imports with them blocked.
+are imported only where the map allows, and the core imports with them blocked; the ROS
+layers import with matplotlib blocked (they draw, at the end of a run, only when they do).
 """
 
 import ast
@@ -32,7 +33,7 @@ THIRD_PARTY = {
     'runtime': {'numpy', 'yaml', 'ament_index_python', 'distributed'},
     'bag': {'numpy', 'yaml', 'mcap', 'zstandard'},
     'analysis': {'numpy', 'yaml', 'matplotlib', 'PIL', 'optuna', 'sqlalchemy'},
-    'ros': {'numpy', 'yaml', 'matplotlib', 'rclpy', 'builtin_interfaces', 'geometry_msgs',
+    'ros': {'numpy', 'yaml', 'rclpy', 'builtin_interfaces', 'geometry_msgs',
             'nav_msgs', 'sensor_msgs', 'std_msgs', 'rosgraph_msgs', 'diagnostic_msgs',
             'rcl_interfaces', 'lifecycle_msgs', 'std_srvs', 'visualization_msgs'},
     'cli': {'numpy', 'yaml', 'matplotlib'},
@@ -118,22 +119,41 @@ def test_imports_go_only_downward(module):
     assert wrong == []
 
 
-def test_the_core_imports_with_ros_pybullet_matplotlib_and_mcap_blocked():
-    core = [m for m in MODULES if layer_of(m) == 'core']
+def import_blocked(modules: list, blocked: set) -> subprocess.CompletedProcess:
+    """Import ``modules`` in a fresh interpreter in which the packages ``blocked`` fail."""
     script = (
         'import importlib, sys\n'
         'class Block:\n'
         '    def find_spec(self, name, path=None, target=None):\n'
-        '        if name.split(".")[0] in {"rclpy", "pybullet", "matplotlib", "mcap"}:\n'
+        f'        if name.split(".")[0] in {sorted(blocked)!r}:\n'
         '            raise ImportError(f"blocked: {name}")\n'
         'sys.meta_path.insert(0, Block())\n'
-        f'for name in {core!r}:\n'
+        f'for name in {modules!r}:\n'
         '    importlib.import_module(name)\n'
         'print(len(sys.modules))\n')
-    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+    return subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           timeout=120)
+
+
+def test_the_core_imports_with_ros_pybullet_matplotlib_and_mcap_blocked():
+    core = [m for m in MODULES if layer_of(m) == 'core']
+    done = import_blocked(core, {'rclpy', 'pybullet', 'matplotlib', 'mcap'})
     assert done.returncode == 0, done.stderr
     assert len(core) >= 10
+
+
+def test_the_ros_layers_import_without_matplotlib():
+    """The nodes and the launcher start without it; the end-of-run report draws with it."""
+    ros = [m for m in MODULES if layer_of(m) in ('ros', 'sim.ros')]
+    done = import_blocked(ros, {'matplotlib'})
+    assert done.returncode == 0, done.stderr
+    assert 'nfmr_dlsmc.ros.launcher' in ros and 'nfmr_sim.ros.sim_node' in ros
+
+
+def test_a_blocked_import_is_caught_through_the_modules_between():
+    """The check itself: analysis' animation imports matplotlib, so a module importing it fails."""
+    done = import_blocked(['nfmr_dlsmc.analysis.animation'], {'matplotlib'})
+    assert done.returncode != 0 and 'blocked: matplotlib' in done.stderr
 
 
 def test_the_layer_test_catches_an_upward_import(tmp_path):

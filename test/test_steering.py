@@ -5,6 +5,7 @@ import math
 from nfmr_dlsmc.core.steering import (
     centre_twist,
     front_steer_from_yaw_rate,
+    geometry_mismatch,
     RobotGeometry,
     SteerMode,
     unicycle_from_wheels,
@@ -123,3 +124,12 @@ def test_a_mode_next_to_crab_is_refused_for_the_point_it_would_track(j1):
         SteerMode(j1, 1.0 - j1)
     near = SteerMode(-0.9, 1.9)
     assert near.zero_slip_offset(GEOM.wheelbase) == pytest.approx(-9.5 * GEOM.wheelbase)
+
+
+def test_a_chassis_of_other_dimensions_is_named_by_the_first_that_differs():
+    # The launcher's check before a run and the in-process plant's are this one.
+    assert geometry_mismatch(GEOM, RobotGeometry()) is None
+    assert geometry_mismatch(GEOM, RobotGeometry(steer_limit=1.0)) is None
+    assert geometry_mismatch(GEOM, RobotGeometry(wheelbase=0.89 + 1e-10)) is None
+    assert geometry_mismatch(GEOM, RobotGeometry(track=0.6, wheel_radius=0.2)) == 'track'
+    assert geometry_mismatch(GEOM, RobotGeometry(wheel_radius=0.14 + 2e-9)) == 'wheel_radius'

@@ -2,7 +2,7 @@
 ``nfmr-analyze``: the paper's metrics of recorded runs, compared side by side.
 
 With ``--animate`` it also draws one run as a GIF or MP4
-(:func:`~nfmr_dlsmc.ros.run_analysis.animate_contents`).
+(:func:`~nfmr_dlsmc.ros.bag_animation.animate_contents`).
 """
 
 import argparse
@@ -12,6 +12,13 @@ import sys
 import time
 
 from nfmr_dlsmc.analysis.animation import AnimationConfig, check_animation_path
+from nfmr_dlsmc.analysis.run_metrics import (
+    last_segment,
+    metrics_table,
+    state_metrics,
+    with_ground_truth,
+)
+from nfmr_dlsmc.analysis.run_plots import plot_runs
 from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.cli.common import (
     check_writable,
@@ -22,22 +29,18 @@ from nfmr_dlsmc.cli.common import (
     UsageError,
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM
-from nfmr_dlsmc.ros.run_analysis import (
-    animate_contents,
-    ANIMATION_TOPICS,
+from nfmr_dlsmc.ros.animation_tracks import ANIMATION_TOPICS
+from nfmr_dlsmc.ros.bag_animation import animate_contents
+from nfmr_dlsmc.ros.run_series import (
     GROUND_TRUTH_TOPIC,
+    ground_truth_track,
     JOINT_TOPIC,
-    last_segment,
-    metrics_table,
     path_goal,
-    plot_runs,
     REFERENCE_PATH_TOPIC,
     run_notes,
-    state_metrics,
     state_series,
     STATE_TOPIC,
     steer_joint_rates,
-    with_ground_truth,
 )
 
 
@@ -144,7 +147,7 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
     state, skipped = state_series(contents)
-    series = with_ground_truth(state, contents)
+    series = with_ground_truth(state, ground_truth_track(contents))
     for note in run_notes(skipped, last_segment(series)[1]):
         print(f'nfmr-analyze: warning: {path}: {note}', file=sys.stderr)
     return {'path': str(path), 'label': _label(path), 'series': series,

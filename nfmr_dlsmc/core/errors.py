@@ -6,7 +6,7 @@ Every command and both nodes catch :class:`NfmrError` in one place
 print its message as one line, ``<prog>: error: <message>``: a parameter, a parameter file,
 a path, a bag or a command line the user gave is wrong, and the message says which and how.
 That is exit status 2, but for a run that started and could not complete
-(:class:`~nfmr_dlsmc.ros.launcher.RunError`: a child died, the run stalled, another source
+(:class:`~nfmr_dlsmc.ros.node_processes.RunError`: a child died, the run stalled, another source
 reached it), which ``nfmr-run`` reports as exit status 1 after finishing its bag. Anything
 else is a bug and keeps its traceback.
 
@@ -19,7 +19,7 @@ Below it: :class:`~nfmr_dlsmc.core.validation.ParameterError` (and its
 :class:`~nfmr_dlsmc.analysis.animation.AnimationError`,
 :class:`~nfmr_dlsmc.analysis.chassis_tuning.StudyError`,
 :class:`~nfmr_dlsmc.runtime.worker_pool.ClusterError` and
-:class:`~nfmr_dlsmc.ros.launcher.RunError`.
+:class:`~nfmr_dlsmc.ros.node_processes.RunError`.
 """
 
 __all__ = ['NfmrError']

@@ -28,9 +28,9 @@ from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
 __all__ = ['NEAR_CRAB_J1', 'RobotGeometry', 'SteerMode', 'WHEEL_NAMES', 'WheelCommands',
-           'centre_twist', 'front_steer_from_yaw_rate', 'steer_angle_series',
-           'unicycle_from_wheels', 'wheel_commands', 'wheel_commands_for_twist',
-           'yaw_rate_from_front_steer']
+           'centre_twist', 'front_steer_from_yaw_rate', 'geometry_mismatch',
+           'steer_angle_series', 'unicycle_from_wheels', 'wheel_commands',
+           'wheel_commands_for_twist', 'yaw_rate_from_front_steer']
 
 #: Wheel order of every per-wheel array.
 WHEEL_NAMES = ('front_left', 'front_right', 'rear_left', 'rear_right')
@@ -68,6 +68,20 @@ class RobotGeometry:
         """(4, 2) array of wheel contact points (x, y) in the body frame [m], FL FR RL RR."""
         a, b = 0.5 * self.wheelbase, 0.5 * self.track
         return np.array([[a, b], [a, -b], [-a, b], [-a, -b]])
+
+
+def geometry_mismatch(geometry: RobotGeometry, chassis: RobotGeometry) -> str | None:
+    """
+    Return the first dimension in which a chassis differs from the mapping's geometry, or None.
+
+    Of ``wheelbase``, ``track`` and ``wheel_radius`` [m], the first that differs by more than
+    a nanometre: the wheel mapping of ``geometry`` drives another robot than ``chassis``
+    (``nfmr_sim``'s chassis extends :class:`RobotGeometry`). ``steer_limit`` may differ.
+    """
+    for name in ('wheelbase', 'track', 'wheel_radius'):
+        if abs(getattr(geometry, name) - getattr(chassis, name)) > 1e-9:
+            return name
+    return None
 
 
 #: Least j1 but crab's -1 [-]: P lies (L/2)(1 - j1)/(1 + j1) behind the centre, 9.5

@@ -1,5 +1,5 @@
 """
-The rclpy side: nodes, parameter declaration, node main loop, run analysis, launcher, replay.
+The rclpy side: nodes, parameter declaration, node main loop, bag decoding, launcher, replay.
 
 The only layer of nfmr_dlsmc that imports rclpy; may import every layer below.
 """

@@ -9,48 +9,37 @@ prints the paper's metrics and those of holding the path next to the same scenar
 this process on the pybullet chassis (no ROS) and on the kinematic model, and writes
 plots. The last line printed is the bag directory. The command line is
 :mod:`nfmr_dlsmc.cli.run`.
+
+This module orders the run. The children are started and stopped by
+:mod:`nfmr_dlsmc.ros.node_processes`, the controller's transitions asked for by
+:mod:`nfmr_dlsmc.ros.lifecycle_client`, the nodes spun and /clock followed by
+:mod:`nfmr_dlsmc.ros.clock_watch`, and the end reported by :mod:`nfmr_dlsmc.ros.run_report`.
 """
 
 from dataclasses import dataclass, replace
-import json
 import math
 import os
 from pathlib import Path
-import re
-import signal
-import subprocess
 import sys
 import time
 
-from lifecycle_msgs.srv import ChangeState, GetState
-from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN, plant_run
-from nfmr_dlsmc.bag.reader import read_bag
+from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.bag.writer import BagWriter
-from nfmr_dlsmc.core.arrival import with_arrival
-from nfmr_dlsmc.core.dlsmc import DlsmcController
-from nfmr_dlsmc.core.errors import NfmrError
-from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
+from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.ros.clock_watch import ClockWatch
+from nfmr_dlsmc.ros.lifecycle_client import ControllerLifecycle, STARTUP_TIMEOUT
 from nfmr_dlsmc.ros.node_main import StopRequest
-from nfmr_dlsmc.ros.recorder_node import RecorderNode
-from nfmr_dlsmc.ros.run_analysis import (
-    animate_bag,
-    DIAGNOSTICS_TOPIC,
-    GROUND_TRUTH_TOPIC,
-    JOINT_TOPIC,
-    last_segment,
-    loop_figures,
-    metrics_table,
-    plot_runs,
-    run_notes,
-    state_metrics,
-    state_series,
-    STEER_FIELDS,
-    steer_joint_rates,
-    with_ground_truth,
+from nfmr_dlsmc.ros.node_processes import (
+    check_children,
+    RunError,
+    start_child,
+    stop_children,
 )
+from nfmr_dlsmc.ros.recorder_node import RecorderNode
+from nfmr_dlsmc.ros.run_report import report_run, report_timing, run_timing
 from nfmr_dlsmc.runtime.params import (
     controller_params,
     load_params_file,
@@ -59,15 +48,12 @@ from nfmr_dlsmc.runtime.params import (
     path_file,
     path_values,
 )
-from nfmr_dlsmc.runtime.parent_death import die_with_parent
 from nfmr_dlsmc.runtime.ros_domain import reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from rosgraph_msgs.msg import Clock
 
 #: Topics of a run and their types (recorded from the first message).
 RUN_TOPICS = {
@@ -83,16 +69,8 @@ RUN_TOPICS = {
 }
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
-STOP_TIMEOUT = 5.0  # [s] a child gets this long to exit after SIGINT, then is killed
-STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
-TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
-DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
 ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
-
-
-class RunError(NfmrError, RuntimeError):
-    """A run that could not complete (a child died); the message says which and why."""
 
 
 @dataclass(frozen=True)
@@ -232,15 +210,14 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     children = []
     status = 0
     real_time_factor = math.nan
-    clock = _ClockWatch(recorder, executor, manager)
+    clock = ClockWatch(recorder, executor, manager)
     stop = StopRequest()
     try:
-        children = [_start_child('sim', 'nfmr_sim.ros.sim_node',
-                                 _sim_args(config, options, settings.initial_pose), run_dir),
-                    _start_child('controller', 'nfmr_dlsmc.ros.controller_node',
-                                 _controller_args(config, options, settings.world),
-                                 run_dir)]
-        controller = _ControllerLifecycle(manager, clock, children, stop)
+        children = [start_child('sim', 'nfmr_sim.ros.sim_node',
+                                _sim_args(config, options, settings.initial_pose), run_dir),
+                    start_child('controller', 'nfmr_dlsmc.ros.controller_node',
+                                _controller_args(config, options, settings.world), run_dir)]
+        controller = ControllerLifecycle(manager, clock, children, stop)
         # The sim starts stepping once the controller subscribes to odometry: when active.
         controller.wait_until_up()
         controller.change('configure')
@@ -253,7 +230,7 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         # that ended as planned ends without a safety stop.
         clock.spin(0.3)
         controller.change('deactivate')  # returns once its telemetry is acknowledged
-        _stop_children(children[1:])
+        stop_children(children[1:])
     except KeyboardInterrupt:
         status = 130
         print('\ninterrupted: stopping the run', file=sys.stderr)
@@ -261,10 +238,10 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         status = 1
         print(f'\nnfmr-run: error: {exc}', file=sys.stderr)
     finally:
-        _stop_children(children[:1])  # the sim first: no new steps
+        stop_children(children[:1])  # the sim first: no new steps
         if any(child.process.poll() is None for child in children[1:]):
             clock.spin(1.0)  # deliver what the controller published for the last steps
-        _stop_children(children[1:])
+        stop_children(children[1:])
         if recorder is not None:
             clock.drain()
             recorder.close()
@@ -278,7 +255,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         rclpy.try_shutdown()
         stop.release()
     if writer is not None and status == 0:
-        _report(bag_dir, run_dir, params, settings, options, writer.counts, real_time_factor)
+        report_run(bag_dir, run_dir, params, settings, options, writer.counts,
+                   real_time_factor)
     elif status == 0:  # not recorded: the pace and the braking, without the loop's figures
         report_timing(run_timing(real_time_factor, None, run_dir / 'sim.log'), run_dir)
     if writer is not None:
@@ -341,20 +319,6 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
     return [*args, '-p', 'tick_source:=sim_clock']
 
 
-@dataclass
-class _Child:
-    """A started node process and its log file."""
-
-    name: str
-    process: subprocess.Popen
-    log: Path
-
-    def tail(self, lines: int = 15) -> str:
-        """Return the last lines of its log, indented."""
-        text = self.log.read_text(errors='replace').splitlines()
-        return '\n'.join('    ' + line for line in text[-lines:])
-
-
 def _new_run_dir(out: Path, config: Path) -> Path:
     """Create ``<out>/<YYYYmmdd-HHMMSS>_<config stem>``, with a suffix rather than reuse."""
     base = out / f"{time.strftime('%Y%m%d-%H%M%S')}_{config.stem}"
@@ -363,95 +327,6 @@ def _new_run_dir(out: Path, config: Path) -> Path:
         path, n = Path(f'{base}_{n}'), n + 1
     path.mkdir(parents=True)
     return path
-
-
-def _start_child(name: str, module: str, args: list, run_dir: Path) -> _Child:
-    """
-    Start ``python -m module args`` in its own session, logging to ``<run_dir>/<name>.log``.
-
-    A terminal's Ctrl-C then reaches only the launcher, which stops the children in order.
-    """
-    log = run_dir / f'{name}.log'
-    env = dict(os.environ, PYTHONUNBUFFERED='1')
-    with log.open('w') as fh:
-        process = subprocess.Popen([sys.executable, '-m', module, *args], stdout=fh,
-                                   stderr=subprocess.STDOUT, env=env, start_new_session=True,
-                                   preexec_fn=die_with_parent)
-    return _Child(name, process, log)
-
-
-def _stop_children(children: list) -> None:
-    """
-    SIGINT every live child, then kill what is still alive after STOP_TIMEOUT.
-
-    A stopped child (SIGSTOP: a stalled run) is continued after its SIGINT, so that it
-    ends at once as the others do instead of being killed after STOP_TIMEOUT.
-    """
-    for child in children:
-        if child.process.poll() is None:
-            child.process.send_signal(signal.SIGINT)
-            child.process.send_signal(signal.SIGCONT)
-    deadline = time.monotonic() + STOP_TIMEOUT
-    for child in children:
-        try:
-            child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            child.process.kill()
-            child.process.wait()
-
-
-class _ClockWatch:
-    """Spins the launcher's nodes and tracks simulated time from /clock (recording or not)."""
-
-    def __init__(self, recorder, executor, node):
-        self.recorder = recorder
-        self.executor = executor
-        self.node = node
-        self.started = time.monotonic()
-        self._clock_ns = 0
-        self.backwards = 0  # /clock messages earlier than the one before
-        node.create_subscription(Clock, '/clock', self._on_clock,
-                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
-
-    def _on_clock(self, msg: Clock) -> None:
-        ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
-        if ns < self._clock_ns:
-            self.backwards += 1
-        self._clock_ns = ns
-
-    def foreign_source(self) -> str | None:
-        """Return what shows that another ROS source feeds this run's topics, or None."""
-        for topic in ('/clock', '/controller_state', '/odom'):
-            count = self.node.count_publishers(topic)
-            if count > 1:
-                return f'{count} publishers on {topic}, where the run has one'
-        if self.backwards:
-            return f'/clock went back {self.backwards} times'
-        return None
-
-    def spin(self, seconds: float) -> None:
-        """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
-
-    @property
-    def sim_time(self) -> float:
-        """Return the simulated time of the last /clock message [s]."""
-        return self._clock_ns * 1e-9
-
-    def drain(self, quiet: float = 0.5, longest: float = DRAIN_TIMEOUT) -> None:
-        """
-        Spin until no message arrived for ``quiet`` seconds, or ``longest`` seconds passed.
-
-        The bound: a source other than the run's children may go on publishing.
-        """
-        last = -1
-        end = time.monotonic() + longest
-        while last != self.recorder.received + self.recorder.pending() \
-                and time.monotonic() < end:
-            last = self.recorder.received + self.recorder.pending()
-            self.spin(quiet)
 
 
 def _check_latency(latency: float, odom_timeout: float) -> None:
@@ -482,15 +357,14 @@ def _robot_mismatch(params, settings) -> str | None:
                 f'{params.steering.j2:g}) but sim steering (j1, j2) = ({mode.j1:g}, '
                 f'{mode.j2:g}): they must match')
     chassis, geometry = settings.world.chassis, params.geometry
-    for name in ('wheelbase', 'track', 'wheel_radius'):
-        ours, sims = getattr(geometry, name), getattr(chassis, name)
-        if abs(ours - sims) > 1e-9:
-            return (f'controller geometry.{name} = {ours:g} m but sim chassis.{name} = '
-                    f'{sims:g} m: they must match')
+    name = geometry_mismatch(geometry, chassis)
+    if name is not None:
+        return (f'controller geometry.{name} = {getattr(geometry, name):g} m but sim '
+                f'chassis.{name} = {getattr(chassis, name):g} m: they must match')
     return None
 
 
-def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
+def _wait_for_run(children: list, clock: ClockWatch, duration: float,
                   stall_timeout: float, stop: StopRequest, step: float) -> float:
     """
     Spin until the sim reaches ``duration``, showing progress.
@@ -517,7 +391,7 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     while True:
         clock.spin(0.05)
         stop.check()
-        _check_children(children)
+        check_children(children)
         if clock.recorder is not None and clock.recorder.failure:
             raise RunError(f'{clock.recorder.failure}; the run is stopped (nfmr-reindex '
                            'recovers the chunks written)')
@@ -552,205 +426,3 @@ def _wait_for_run(children: list, clock: _ClockWatch, duration: float,
     if first is None or now <= first[0]:
         return math.nan
     return (sim_t - first[1]) / (now - first[0])
-
-
-def _check_children(children: list) -> None:
-    """
-    Raise if a child exited.
-
-    Raises
-    ------
-    RunError
-        Naming the child, its exit code and the last lines of its log.
-
-    """
-    for child in children:
-        code = child.process.poll()
-        if code is not None:
-            raise RunError(f'{child.name} exited with code {code}; last lines of '
-                           f'{child.log}:\n{child.tail()}')
-
-
-class _ControllerLifecycle:
-    """
-    The controller's lifecycle transitions, asked for over its services.
-
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The launcher's node the service clients belong to (spun by ``clock``).
-    clock : _ClockWatch
-        Spins the launcher's nodes while waiting.
-    children : list of _Child
-        The sim, then the controller: a child that exits meanwhile ends the wait.
-    stop : StopRequest
-        Ctrl-C and SIGTERM end the wait.
-
-    """
-
-    def __init__(self, node, clock: _ClockWatch, children: list, stop: StopRequest):
-        self._node = node
-        self._clock = clock
-        self._children = children
-        self._stop = stop
-        self._change = node.create_client(ChangeState, '/controller/change_state')
-        self._get = node.create_client(GetState, '/controller/get_state')
-
-    def _wait(self, done, timeout: float) -> bool:
-        """
-        Spin until ``done()``, at most ``timeout`` [s]; return ``done()``.
-
-        Raises
-        ------
-        RunError
-            A child exited.
-        KeyboardInterrupt
-            A stop was requested.
-
-        """
-        end = time.monotonic() + timeout
-        while not done():
-            self._stop.check()
-            _check_children(self._children)
-            if time.monotonic() > end:
-                return False
-            self._clock.spin(0.02)
-        return True
-
-    def wait_until_up(self) -> None:
-        """
-        Wait until the controller answers on its lifecycle services and the sim publishes.
-
-        A request sent while the controller's answer cannot reach this node yet (DDS is
-        still matching them) is lost: ``get_state``, which changes nothing, is asked until
-        it is answered, so that no transition request is lost.
-
-        Raises
-        ------
-        RunError
-            A child exited, or they were not up within STARTUP_TIMEOUT.
-
-        """
-        deadline = time.monotonic() + STARTUP_TIMEOUT
-        ready = self._wait(lambda: self._get.service_is_ready() and
-                           self._change.service_is_ready() and
-                           self._node.count_publishers('/odom') > 0, STARTUP_TIMEOUT)
-        while ready:
-            future = self._get.call_async(GetState.Request())
-            if self._wait(future.done, 1.0):
-                return
-            self._get.remove_pending_request(future)
-            ready = time.monotonic() < deadline
-        raise RunError(f'the controller and the sim were not up within {STARTUP_TIMEOUT:g} s '
-                       '(the controller answering its lifecycle services, the sim publishing '
-                       'odometry)')
-
-    def change(self, transition: str) -> None:
-        """
-        Ask the controller for ``transition`` (``configure``, ``activate``, ...).
-
-        Raises
-        ------
-        RunError
-            Naming the transition when it failed, with the controller's log tail, or when
-            no answer came within TRANSITION_TIMEOUT.
-
-        """
-        request = ChangeState.Request()
-        request.transition.label = transition
-        future = self._change.call_async(request)
-        if not self._wait(future.done, TRANSITION_TIMEOUT):
-            raise RunError(f"controller transition '{transition}' got no answer within "
-                           f'{TRANSITION_TIMEOUT:g} s')
-        if not future.result().success:
-            controller = self._children[1]
-            raise RunError(f"controller transition '{transition}' failed; last lines of "
-                           f'{controller.log}:\n{controller.tail()}')
-
-
-def _report(bag_dir, run_dir, params, settings, options: RunOptions, counts,
-            real_time_factor: float) -> None:
-    """
-    Print the metrics table and write plots.
-
-    The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
-    the in-process pybullet plant and the kinematic model.
-    """
-    contents = read_bag(bag_dir, topics=['/controller_state', JOINT_TOPIC, GROUND_TRUTH_TOPIC,
-                                         DIAGNOSTICS_TOPIC])
-    state, skipped = state_series(contents)
-    series = with_ground_truth(state, contents)
-    _, segments = last_segment(series)
-    for note in run_notes(skipped, segments):
-        print(f'nfmr-run: warning: {note}', file=sys.stderr)
-    goal = getattr(params.trajectory, 'end_pose', None)
-    columns = [('ROS pybullet', state_metrics(series, options.hold_from,
-                                              steer_joint_rates(contents), goal))]
-    runs = [('ROS pybullet', series)]
-    if not options.no_compare:
-        print('the same scenario in this process: pybullet, then the kinematic model ...',
-              file=sys.stderr, flush=True)
-        for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
-            controller = with_arrival(DlsmcController(params.dlsmc), params.trajectory,
-                                      params.arrival)
-            sim = plant_run(plant, controller, params, params.trajectory,
-                            settings.initial_pose, options.duration, settings.world)
-            columns.append((label, simulation_metrics(sim, options.hold_from, goal)))
-            plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
-                       'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
-                       'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}
-            if sim.steer is not None:
-                plotted.update(zip(STEER_FIELDS, sim.steer.T))
-            runs.append((label, plotted))
-    plot_runs(runs, run_dir)
-    print(metrics_table(columns))
-    stopped = int(series['stopped'].sum())
-    print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
-          f'{sum(counts.values())} messages recorded; plots in {run_dir}')
-    report_timing(run_timing(real_time_factor, loop_figures(contents), run_dir / 'sim.log'),
-                  run_dir)
-    if options.animate:
-        _animate(bag_dir, run_dir / 'run.gif')
-
-
-def run_timing(real_time_factor: float, loop: dict | None, sim_log: Path) -> dict:
-    """
-    Return how a run kept its timing.
-
-    ``sim_real_time_factor`` [-], ``sim_behind_s`` (the wall time the realtime sim gave up,
-    from its log; 0 if none), ``controller_loop`` (``rate_hz``, ``period_p99_ms``,
-    ``overruns``, ``windows`` from the recorded ``/diagnostics``; None without a bag) and
-    ``sim_braked`` (how often the sim braked for want of a valid command).
-    """
-    log = sim_log.read_text() if sim_log.is_file() else ''
-    braking = sum(1 for line in log.splitlines()
-                  if 'braking' in line and 'no command received yet' not in line)
-    behind = re.findall(r'slower than real time: ([0-9.]+) s behind', log)
-    return {'sim_real_time_factor': real_time_factor,
-            'sim_behind_s': float(behind[-1]) if behind else 0.0,
-            'controller_loop': loop, 'sim_braked': braking}
-
-
-def report_timing(timing: dict, run_dir: Path) -> None:
-    """Print the timing line and write it to ``timing.json`` in the run folder."""
-    parts = [f"timing: sim {timing['sim_real_time_factor']:.2f}x real time"
-             + (f" ({timing['sim_behind_s']:.3f} s behind the wall clock)"
-                if timing['sim_behind_s'] else '')]
-    loop = timing['controller_loop']
-    if loop:
-        parts.append(f"controller loop {loop['rate_hz']:.1f} Hz, period p99 "
-                     f"{loop['period_p99_ms']:.2f} ms, {loop['overruns']:.0f} overruns")
-    parts.append(f"sim braked {timing['sim_braked']} times for a missing or invalid command")
-    print('; '.join(parts))
-    (run_dir / 'timing.json').write_text(json.dumps(timing, indent=2) + '\n')
-
-
-def _animate(bag_dir: Path, out: Path) -> None:
-    """Write the animation of the run, showing progress on stderr."""
-    def progress(done, total):
-        if done == total or done % 25 == 0:
-            print(f'\ranimation: frame {done} / {total}', end='', file=sys.stderr, flush=True)
-
-    made = animate_bag(bag_dir, out, progress=progress)
-    print(f"\nanimation: {out} ({made['frames']} frames, {made['seconds']:.1f} s of output) "
-          f"in {made['wall_s']:.1f} s", file=sys.stderr)

@@ -1,0 +1,68 @@
+"""
+The launcher's spinning: its nodes (the recorder, the lifecycle client) and /clock.
+
+:class:`ClockWatch` spins them for as long as asked, follows simulated time from
+``/clock`` whether the run is recorded or not, tells when another ROS source reaches the
+run's topics, and at the end waits for the recorder to take the last messages.
+"""
+
+import time
+
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+
+DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
+
+
+class ClockWatch:
+    """Spins the launcher's nodes and tracks simulated time from /clock (recording or not)."""
+
+    def __init__(self, recorder, executor, node):
+        self.recorder = recorder
+        self.executor = executor
+        self.node = node
+        self.started = time.monotonic()
+        self._clock_ns = 0
+        self.backwards = 0  # /clock messages earlier than the one before
+        node.create_subscription(Clock, '/clock', self._on_clock,
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+
+    def _on_clock(self, msg: Clock) -> None:
+        ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+        if ns < self._clock_ns:
+            self.backwards += 1
+        self._clock_ns = ns
+
+    def foreign_source(self) -> str | None:
+        """Return what shows that another ROS source feeds this run's topics, or None."""
+        for topic in ('/clock', '/controller_state', '/odom'):
+            count = self.node.count_publishers(topic)
+            if count > 1:
+                return f'{count} publishers on {topic}, where the run has one'
+        if self.backwards:
+            return f'/clock went back {self.backwards} times'
+        return None
+
+    def spin(self, seconds: float) -> None:
+        """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
+
+    @property
+    def sim_time(self) -> float:
+        """Return the simulated time of the last /clock message [s]."""
+        return self._clock_ns * 1e-9
+
+    def drain(self, quiet: float = 0.5, longest: float = DRAIN_TIMEOUT) -> None:
+        """
+        Spin until no message arrived for ``quiet`` seconds, or ``longest`` seconds passed.
+
+        The bound: a source other than the run's children may go on publishing.
+        """
+        last = -1
+        end = time.monotonic() + longest
+        while last != self.recorder.received + self.recorder.pending() \
+                and time.monotonic() < end:
+            last = self.recorder.received + self.recorder.pending()
+            self.spin(quiet)
