@@ -10,7 +10,7 @@ from pathlib import Path
 import subprocess
 import sys
 
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.core.arrival import (
@@ -226,3 +226,64 @@ def test_the_node_session_says_arrived_once_and_commands_zero_from_then_on():
     assert len(arrived) == 1 and 'mm' in arrived[0], reports
     first = outcomes.index(1.0)
     assert set(outcomes[first:]) == {1.0} and out.v == 0.0 and out.omega == 0.0
+
+
+def _slow_and_near(band):
+    """Return the commands of a law held 1 mm beside a slow reference, heading swinging."""
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD,
+                                    ArrivalConfig(slow_curvature_band=band))
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))  # the reference leaves
+    return [controller.step(0.9, 0.001, theta, 0.9, 0.0, 0.1, 0.0, 0.001)
+            for theta in (0.05, -0.05) * 10]
+
+
+def test_slow_and_near_the_reference_the_curvature_changes_gently():
+    # Half v_min: the band is twice slow_curvature_band around the straight reference's 0.
+    config = ArrivalConfig()
+    curvature = np.array([omega / v for v, omega in _slow_and_near(config.slow_curvature_band)])
+    assert np.all(np.abs(curvature) <= 2.0 * config.slow_curvature_band + 1e-12)
+    assert abs(curvature[0]) <= config.slow_curvature_rate * 0.001 + 1e-12  # from 0
+    assert np.abs(np.diff(curvature)).max() <= config.slow_curvature_rate * 0.001 + 1e-12
+    # The law alone swings its curvature by metres⁻¹ from one tick to the next.
+    alone = np.array([omega / v for v, omega in _slow_and_near(0.0)])
+    assert np.abs(np.diff(alone)).max() > 1.0
+
+
+def test_at_rest_near_the_reference_the_steering_is_held_and_far_the_law_steers():
+    for band, pose in ((0.05, (0.0, 0.001)), (0.0, (0.0, 0.001)), (0.05, (0.0, 0.02))):
+        controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD,
+                                        ArrivalConfig(slow_curvature_band=band))
+        v, omega = controller.step(*pose, 0.3, 0.0, 0.0, 0.0, 0.0, 0.001)  # the start, at rest
+        law = ArrivingController(robot_dlsmc(), GOAL_AHEAD,
+                                 ArrivalConfig(slow_curvature_band=0.0))
+        alone = law.step(*pose, 0.3, 0.0, 0.0, 0.0, 0.0, 0.001)
+        if band > 0.0 and pose[1] < 0.005:
+            assert abs(omega) <= config_rate_step(v) + 1e-12 and abs(alone[1]) > 0.1
+        else:  # the rule off, or the robot 2 cm off the reference: the law's own command
+            assert (v, omega) == alone
+
+
+def test_at_rest_on_the_reference_the_robot_does_not_turn_on_the_spot():
+    # On the reference at rest, 0.3 rad off its heading: the law alone turns in place.
+    for band, turns in ((0.05, False), (0.0, True)):
+        controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD,
+                                        ArrivalConfig(slow_curvature_band=band))
+        v, omega = controller.step(0.0, 0.0, 0.3, 0.0, 0.0, 0.0, 0.0, 0.001)
+        assert v == 0.0 and (abs(omega) > 0.1) == turns
+
+
+def config_rate_step(v, dt=0.001):
+    """Return the largest omega [rad/s] the first slow step may command at speed ``v``."""
+    return ArrivalConfig().slow_curvature_rate * dt * v
+
+
+@settings(max_examples=200, deadline=None)
+@example(0.0, 6.5e-247, 0.0, 0.0, 0.0, 0.0)  # a speed whose square underflows to 0
+@given(st.floats(-1.0, 1.0), st.floats(-0.01, 0.01), st.floats(-math.pi, math.pi),
+       st.floats(0.0, 0.3), st.floats(-5.0, 5.0), st.floats(-5.0, 5.0))
+def test_slow_commands_are_finite_and_within_the_limits(x, y, theta, speed, xddot, yddot):
+    controller = ArrivingController(robot_dlsmc(), GOAL_AHEAD, ArrivalConfig())
+    _step_at(controller, (0.0, 0.0, 0.0), (0.0, 0.0, 0.5, 0.0))  # the reference leaves
+    v, omega = controller.step(x, y, theta, x, 0.0, speed, 0.0, 0.001, xddot, yddot)
+    assert math.isfinite(v) and math.isfinite(omega)
+    assert abs(omega) <= InputLimits().omega_max

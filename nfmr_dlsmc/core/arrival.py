@@ -21,6 +21,17 @@ robot a few millimetres off would turn around it. :class:`ArrivingController` wr
    tolerances could only come closer by turning around: it stops where it is.
 4. Timed out: a robot that has neither arrived nor passed ``goal_timeout`` [s] after the
    reference came to rest (blocked, pushed, too far to the side) stops where it is.
+5. Waits: a robot ahead of a reference slower than v_min by more than :data:`WAIT_SHARE`
+   of ``goal_tolerance`` is commanded zero until the reference is level with it.
+6. Steers gently when slow: while the reference is slower than v_min and the robot within
+   ``goal_tolerance`` of it (starting from rest on the path, the final approach), the
+   commanded curvature omega/v stays within ``slow_curvature_band`` / (1 - v_d/v_min)
+   [1/m] of the reference's own curvature and changes by at most ``slow_curvature_rate``
+   [1/(m s)]; at rest (v = 0) omega is 0, so the steering is held. Below v_min a law's
+   heading command is the bearing of millimetre errors, and its omega over a v of a few
+   cm/s turns the wheels by tenths of a radian at once. The band widens to nothing as the
+   reference reaches v_min, so the law takes over without a step. A robot farther from the
+   reference (a start off the path) is left to the law, which must turn it onto the path.
 
 Whichever ends the run, :attr:`ArrivingController.outcome` says which, the next steps
 command zero, and :meth:`~ArrivingController.reset` starts over (a new reference).
@@ -30,7 +41,7 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
-from nfmr_dlsmc.core.schema import check_fields, documented, param, POSITIVE
+from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
 
 __all__ = ['ARRIVAL_OUTCOMES', 'ArrivalConfig', 'ArrivingController', 'FINAL_SHARE',
            'with_arrival']
@@ -66,6 +77,14 @@ class ArrivalConfig:
     goal_timeout: float = param(10.0, 's', 'a robot not arrived this long after the '
                                 'reference came to rest stops where it is, reporting it',
                                 POSITIVE)
+    slow_curvature_band: float = param(0.05, '1/m', 'while the reference is slower than '
+                                       'limits.v_min and the robot within goal_tolerance '
+                                       'of it: the commanded curvature omega/v stays within '
+                                       "this of the reference's, widened by "
+                                       '1/(1 - v_d/v_min); 0: off, the law steers alone',
+                                       NON_NEGATIVE)
+    slow_curvature_rate: float = param(4.0, '1/(m s)', 'how fast the commanded curvature '
+                                       'may change meanwhile (slow_curvature_band)', POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -120,6 +139,7 @@ class ArrivingController:
         self.position_error = self.yaw_error = math.nan
         self._left_goal = False  # whether the reference has been away from the goal
         self._at_rest = 0.0  # time [s] the reference has rested at the goal
+        self._curvature = None  # [1/m] the last commanded omega/v (None before a move)
 
     @property
     def ended(self) -> bool:
@@ -146,8 +166,7 @@ class ArrivingController:
         distance = math.hypot(dx, dy)
         yaw_error = math.remainder(theta - gyaw, 2.0 * math.pi)
         if not self._left_goal:
-            return self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
-                                        yddot_d)
+            return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d)
         if (reference_distance <= FINAL_SHARE * config.goal_tolerance
                 and distance <= config.goal_tolerance and abs(yaw_error) <= config.yaw_tolerance):
             return self._end(_ARRIVED, distance, yaw_error)
@@ -163,8 +182,37 @@ class ArrivingController:
             ahead = (x - x_d) * math.cos(heading) + (y - y_d) * math.sin(heading)
             if ahead > WAIT_SHARE * config.goal_tolerance:
                 return 0.0, 0.0  # wait for the slow reference rather than turn round to it
-        return self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
-                                    yddot_d)
+        return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d)
+
+    def _steered(self, x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d):
+        """Return the wrapped law's (v, omega), its curvature bounded when slow (rule 6)."""
+        v, omega = self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
+                                        yddot_d)
+        config = self.config
+        speed_d = math.hypot(xdot_d, ydot_d)
+        v_min = self.controller.limits.v_min
+        if (config.slow_curvature_band > 0.0 and speed_d < v_min
+                and math.hypot(x - x_d, y - y_d) <= config.goal_tolerance):
+            if v <= 0.0:
+                return v, 0.0  # at rest: the steering is held
+            # The reference's curvature (xdot yddot - ydot xddot) / |v_d|^3 [1/m], no more
+            # than omega_max allows at this v (a reference at rest has none).
+            omega_max = self.controller.limits.omega_max
+            reach = omega_max / v
+            cubed = speed_d ** 3
+            kappa_d = ((xdot_d * yddot_d - ydot_d * xddot_d) / cubed if cubed > 0.0 else 0.0)
+            kappa_d = min(max(kappa_d, -reach), reach)
+            band = config.slow_curvature_band / (1.0 - speed_d / v_min)
+            curvature = min(max(omega / v, kappa_d - band), kappa_d + band)
+            # From the reference's own curvature when the robot has not moved yet.
+            previous = kappa_d if self._curvature is None else self._curvature
+            step = config.slow_curvature_rate * (self.controller.period if dt is None else dt)
+            curvature = min(max(curvature, previous - step), previous + step)
+            self._curvature = curvature
+            return v, min(max(curvature * v, -omega_max), omega_max)
+        if v > 0.0:
+            self._curvature = omega / v
+        return v, omega
 
     def _end(self, outcome: float, distance: float, yaw_error: float) -> tuple[float, float]:
         self.outcome = outcome

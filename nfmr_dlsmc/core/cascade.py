@@ -128,7 +128,10 @@ class CascadeController(SaturatedController):
             udot_x, udot_y = self.outer.input_rate(v * math.cos(theta) - xdot_d,
                                                    v * math.sin(theta) - ydot_d,
                                                    xddot_d, yddot_d)
-            thetadot_d = (u_x * udot_y - u_y * udot_x) / (v_raw * v_raw) if v_raw > 0.0 else 0.0
+            # |u|^2 underflows to 0 below 1e-162 m/s: no direction there, as at 0.
+            speed_squared = v_raw * v_raw
+            thetadot_d = ((u_x * udot_y - u_y * udot_x) / speed_squared if speed_squared > 0.0
+                          else 0.0)
         elif self._has_previous:
             raw = math.remainder(theta_d - self.theta_d, _TWO_PI)
             if raw == -math.pi:
