@@ -3,8 +3,8 @@ The DLSMC closed loop for many robots at once: one vectorised numpy step for all
 
 The same laws, saturation and forward-Euler kinematics as
 :class:`~nfmr_dlsmc.core.dlsmc.DlsmcController` with :func:`~nfmr_dlsmc.plants.kinematic.simulate`,
-each robot with its own integrals, adaptive phase and e(0): the position loop's equations
-are its own functions (:mod:`~nfmr_dlsmc.core.outer_loop`,
+each robot with its own integrals, adaptive phase and e(0): the equations are the loops'
+own functions (:mod:`~nfmr_dlsmc.core.outer_loop`, :mod:`~nfmr_dlsmc.core.inner_loop`,
 :mod:`~nfmr_dlsmc.core.sliding_functions`) applied to arrays, with numpy's and scipy's
 elementary functions in place of libm's (pow, sin, erf: they differ in the last bit for
 some arguments). Metrics are accumulated on the fly, so thousands of robots fit in memory.
@@ -15,10 +15,15 @@ from dataclasses import dataclass, fields
 
 from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.gains import adapted_rates, DlsmcConfig
-from nfmr_dlsmc.core.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.inner_loop import (
+    adaptation_rate,
+    barrier_gain,
+    in_barrier_phase,
+    yaw_rate_command,
+)
 from nfmr_dlsmc.core.metrics import CONVERGENCE_TOLERANCE
 from nfmr_dlsmc.core.outer_loop import position_input, sliding_variable
-from nfmr_dlsmc.core.sliding_functions import ARRAYS, bounded_rate, sig_pow
+from nfmr_dlsmc.core.sliding_functions import ARRAYS, bounded_rate
 from nfmr_dlsmc.core.validation import check_positive, ParameterError
 import numpy as np
 
@@ -140,7 +145,7 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     int_ax, int_ay = np.zeros(n), np.zeros(n)
     alpha_x, alpha_y = np.zeros(n), np.zeros(n)
     eta_int, eta_rate = np.zeros(n), np.zeros(n)
-    phase = np.full(n, INTEGRAL_PHASE)
+    barrier = np.zeros(n, dtype=bool)  # eta_hat in its barrier phase
     theta_d_prev, thdot = np.zeros(n), np.zeros(n)
     filter_gain = dt / (config.thetadot_filter + dt)
     iae, ise, sum_d, sum_d2 = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
@@ -178,17 +183,12 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
         s_th = wrap_angles(th - theta_d)
         a = np.abs(s_th)
         eta_int += eta_rate * dt
-        phase = np.where((phase == BARRIER_PHASE) & (a >= i.eps), INTEGRAL_PHASE,
-                         np.where((phase == INTEGRAL_PHASE) & (a <= 0.5 * i.eps),
-                                  BARRIER_PHASE, phase))
-        integrating = phase == INTEGRAL_PHASE
+        barrier = in_barrier_phase(barrier, a, i.eps)
         with np.errstate(divide='ignore', invalid='ignore'):
-            barrier = i.lam * a / (i.eps - a)
-        eta = np.where(integrating, eta_int, barrier)
-        sign = np.sign(s_th)
-        omega_raw = thdot - i.k1 * sig_pow(s_th, r1, ARRAYS) - eta * sign
+            eta = np.where(barrier, barrier_gain(a, i.lam, i.eps), eta_int)
+        omega_raw = yaw_rate_command(thdot, s_th, eta, i.k1, r1, xp=ARRAYS)
         held = (np.abs(omega_raw) > lim.omega_max) if i.anti_windup else False
-        eta_rate = np.where(integrating & ~held, i.L0 + i.L1 * a, 0.0)
+        eta_rate = np.where(barrier | held, 0.0, adaptation_rate(a, i.L0, i.L1))
         v = np.clip(np.hypot(u_x, u_y), lim.v_min, lim.v_max)
         w = np.clip(omega_raw, -lim.omega_max, lim.omega_max)
         # Metrics of this step, then forward Euler of eq. (3).
