@@ -47,7 +47,7 @@ def _clip(x: float, low: float, high: float) -> float:
     return low if x < low else (high if x > high else x)
 
 
-#: Python floats: libm through the math module.
+#: Python floats: libm through the math module, and the two helpers above.
 FLOATS = Elementwise(math.sin, math.erf, math.copysign, sign, _clip)
 #: numpy arrays (the batch simulator): numpy's ufuncs and scipy's erf.
 ARRAYS = Elementwise(np.sin, special.erf, np.copysign, np.sign, np.clip)
