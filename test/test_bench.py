@@ -6,9 +6,14 @@ from pathlib import Path
 import subprocess
 import sys
 
+from nfmr_dlsmc.analysis.benchmarks import kinematic_steps_per_second
+from nfmr_dlsmc.analysis.plain_loop import plain_dlsmc_loop
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.trajectories import make_trajectory
+from nfmr_dlsmc.plants.kinematic import simulate
+import numpy as np
 import pytest
 
-pytestmark = pytest.mark.slow
 BENCH = str(Path(sys.executable).parent / 'nfmr-bench')
 
 
@@ -24,6 +29,26 @@ def numbers(tree, path=''):
         yield path, tree
 
 
+@pytest.mark.parametrize('name, x0', [('sine', (1.0, 4.0, 0.0)), ('circle', (-2.0, -1.0, 3.0))])
+def test_the_plain_loop_steps_the_packages_law(name, x0):
+    # The yardstick of the kinematic figure: the same equations, so the same trajectory.
+    trajectory = make_trajectory(name)
+    run = simulate(DlsmcController(), trajectory, x0, 15.0)
+    plain = plain_dlsmc_loop(trajectory, x0, 15.0)
+    np.testing.assert_allclose(plain, np.column_stack([run.state, run.v, run.omega]),
+                               rtol=0.0, atol=1e-9)
+
+
+def test_the_kinematic_figure_comes_with_its_ratio_to_the_plain_loop():
+    figure = kinematic_steps_per_second(1)
+    assert figure['steps'] == 100_000
+    for key in ('steps_per_s', 'plain_loop_steps_per_s', 'ratio_to_plain_loop'):
+        assert math.isfinite(figure[key]) and figure[key] > 0.0, key
+    assert figure['ratio_to_plain_loop'] == pytest.approx(
+        figure['steps_per_s'] / figure['plain_loop_steps_per_s'])
+
+
+@pytest.mark.slow
 def test_bench_with_nodes_reports_every_figure(tmp_path):
     out = tmp_path / 'bench.json'
     proc = subprocess.run([BENCH, '--nodes', '--seconds', '2', '--repeat', '1',
@@ -32,6 +57,9 @@ def test_bench_with_nodes_reports_every_figure(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert 'Traceback' not in proc.stderr
     figures = json.loads(out.read_text())
+    kinematic = figures['kinematic_scalar']
+    assert kinematic['ratio_to_plain_loop'] > 0.0 and kinematic['plain_loop_steps_per_s'] > 0.0
+    assert 'closed loop / plain loop' in proc.stdout
     nodes = figures['nodes']
     for section in ('controller_loop', 'plain_rclpy_timer', 'odom_to_command_latency',
                     'rss_mb', 'bag_writer'):

@@ -16,12 +16,8 @@ from nfmr_dlsmc.core.metrics import (
     total_variation_rate,
     tracking_metrics,
 )
-from nfmr_dlsmc.core.sliding_functions import (
-    bounded_rate,
-    bounded_rate_slope,
-    reaching_term,
-    reaching_term_slope,
-)
+from nfmr_dlsmc.core.outer_loop import position_input, reaching_term_slope
+from nfmr_dlsmc.core.sliding_functions import bounded_rate, bounded_rate_slope
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.runtime.params import ControllerParams
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
@@ -120,15 +116,29 @@ def test_format_metric_cells(value, text):
     assert format_metric(value) == text
 
 
-# --- reaching_term: g(s) = |s|^r erf(h s) -----------------------------------------------------
+# --- position_input, eqs (34), (35): u = v_d - k2 |s|^r erf(h s) - C alpha ----------------------
 
-def test_reaching_term_is_the_odd_power_erf_product():
+def reaching_term(s, k2, r, h):
+    """Return k2 |s|^r erf(h s) as eq. (34) subtracts it: from the law, with v_d = C = 0."""
+    return -position_input(0.0, s, 0.0, 0.0, k2, r, h)
+
+
+def test_the_reaching_term_is_the_odd_power_erf_product():
     # |0.25|^0.5 = 0.5; erf(2 * 0.25) = erf(0.5) = 0.5204998778130465
-    assert math.isclose(reaching_term(0.25, 0.5, 2.0), 0.5 * 0.5204998778130465, rel_tol=1e-12)
-    assert math.isclose(reaching_term(-0.25, 0.5, 2.0), -0.5 * 0.5204998778130465, rel_tol=1e-12)
-    # |4|^0.5 = 2; erf(0.1 * 4) = erf(0.4) = 0.42839235504666845
-    assert math.isclose(reaching_term(4.0, 0.5, 0.1), 2.0 * 0.42839235504666845, rel_tol=1e-12)
-    assert reaching_term(0.0, 0.5, 2.0) == 0.0
+    assert math.isclose(reaching_term(0.25, 1.0, 0.5, 2.0), 0.5 * 0.5204998778130465,
+                        rel_tol=1e-12)
+    assert math.isclose(reaching_term(-0.25, 1.0, 0.5, 2.0), -0.5 * 0.5204998778130465,
+                        rel_tol=1e-12)
+    # |4|^0.5 = 2; erf(0.1 * 4) = erf(0.4) = 0.42839235504666845; k2 = 3 scales it.
+    assert math.isclose(reaching_term(4.0, 3.0, 0.5, 0.1), 6.0 * 0.42839235504666845,
+                        rel_tol=1e-12)
+    assert reaching_term(0.0, 1.0, 0.5, 2.0) == 0.0
+
+
+def test_position_input_subtracts_the_reaching_term_and_the_rate_term():
+    # v_d = 0.4 m/s, s = 0.25 m, alpha = 0.5, C = 0.6 m/s, k2 = 2: 0.4 - 2 * 0.5 * erf(0.5) - 0.3
+    u = position_input(0.4, 0.25, 0.5, 0.6, 2.0, 0.5, 2.0)
+    assert math.isclose(u, 0.4 - 2.0 * 0.5 * 0.5204998778130465 - 0.6 * 0.5, rel_tol=1e-12)
 
 
 # --- TrackingSession.set_params: live parameter changes reach the next tick -----------------
@@ -276,16 +286,16 @@ def test_bounded_rate_slope_zones():
 
 
 @pytest.mark.parametrize('s', [0.3, -0.3, 2.0, -0.01])
-def test_reaching_term_slope_is_the_derivative_of_g(s):
-    r, h = 0.5, 2.0
+def test_reaching_term_slope_is_the_derivative_of_the_reaching_term(s):
+    k2, r, h = 1.5, 0.5, 2.0
     a = abs(s)
-    by_hand = (r * a ** (r - 1.0) * abs(math.erf(h * s))
-               + a ** r * 2.0 * h / math.sqrt(math.pi) * math.exp(-(h * s) ** 2))
-    assert math.isclose(reaching_term_slope(s, r, h), by_hand, rel_tol=1e-12)
+    by_hand = k2 * (r * a ** (r - 1.0) * abs(math.erf(h * s))
+                    + a ** r * 2.0 * h / math.sqrt(math.pi) * math.exp(-(h * s) ** 2))
+    assert math.isclose(reaching_term_slope(s, k2, r, h), by_hand, rel_tol=1e-12)
     step = 1e-7
-    numeric = (reaching_term(s + step, r, h) - reaching_term(s - step, r, h)) / (2 * step)
-    assert math.isclose(reaching_term_slope(s, r, h), numeric, rel_tol=1e-5)
-    assert reaching_term_slope(0.0, r, h) == 0.0
+    numeric = (reaching_term(s + step, k2, r, h) - reaching_term(s - step, k2, r, h)) / (2 * step)
+    assert math.isclose(reaching_term_slope(s, k2, r, h), numeric, rel_tol=1e-5)
+    assert reaching_term_slope(0.0, k2, r, h) == 0.0
 
 
 # --- TrackingSession guards: the edges of the odometry checks --------------------------------

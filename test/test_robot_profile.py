@@ -11,13 +11,8 @@ from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
 from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop, BARRIER_PHASE, INTEGRAL_PHASE
 from nfmr_dlsmc.core.metrics import simulation_metrics
-from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
-from nfmr_dlsmc.core.sliding_functions import (
-    bounded_rate,
-    bounded_rate_slope,
-    reaching_term,
-    reaching_term_slope,
-)
+from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop, position_input, reaching_term_slope
+from nfmr_dlsmc.core.sliding_functions import bounded_rate, bounded_rate_slope
 from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.batch import simulate_batch
@@ -70,16 +65,18 @@ def test_paper_alpha_slope_is_infinite_at_zero():
 
 
 @pytest.mark.parametrize('s', [-1.0, -0.05, -1e-4, 2e-3, 0.3, 2.0])
-def test_reaching_term_slope_matches_a_central_difference(s):
+def test_reaching_term_slope_matches_a_central_difference_of_the_law(s):
+    # -du/ds of eq. (34) at fixed alpha is the reaching term's slope.
     h = 1e-8
-    numeric = (reaching_term(s + h, R3, 2.0) - reaching_term(s - h, R3, 2.0)) / (2 * h)
-    assert reaching_term_slope(s, R3, 2.0) == pytest.approx(numeric, rel=1e-5, abs=1e-6)
+    numeric = -(position_input(0.0, s + h, 0.0, 0.0, 1.0, R3, 2.0)
+                - position_input(0.0, s - h, 0.0, 0.0, 1.0, R3, 2.0)) / (2 * h)
+    assert reaching_term_slope(s, 1.0, R3, 2.0) == pytest.approx(numeric, rel=1e-5, abs=1e-6)
 
 
 def test_reaching_term_slope_vanishes_at_zero():
     # g(s) ~ (2 h / sqrt(pi)) |s|^(1 + r): its slope goes to 0 like |s|^r.
-    assert reaching_term_slope(0.0, R3, 2.0) == 0.0
-    near = reaching_term_slope(1e-6, R3, 2.0)
+    assert reaching_term_slope(0.0, 1.0, R3, 2.0) == 0.0
+    near = reaching_term_slope(1e-6, 1.0, R3, 2.0)
     assert near == pytest.approx((1 + R3) * 4 / math.sqrt(math.pi) * 1e-6 ** R3, rel=1e-3)
 
 

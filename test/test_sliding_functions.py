@@ -1,8 +1,21 @@
-"""sig_pow and the bounded rate alpha of eq. (33)."""
+"""sig_pow, the bounded rate alpha of eq. (33), and every equation on floats and on arrays."""
 
 import math
 
-from nfmr_dlsmc.core.sliding_functions import bounded_rate, sig_pow
+from nfmr_dlsmc.core.inner_loop import (
+    adaptation_rate,
+    barrier_gain,
+    in_barrier_phase,
+    yaw_rate_command,
+)
+from nfmr_dlsmc.core.outer_loop import position_input, sliding_variable
+from nfmr_dlsmc.core.sliding_functions import (
+    ARRAYS,
+    bounded_rate,
+    saturated_sign,
+    sig_pow,
+    sign,
+)
 import numpy as np
 import pytest
 
@@ -35,3 +48,47 @@ def test_alpha_is_odd_bounded_monotone_and_continuous_at_xi():
     assert np.all(np.diff(a) >= 0.0)
     assert bounded_rate(xi - 1e-9, xi, R2) == pytest.approx(1.0, abs=1e-8)
     assert bounded_rate(-xi + 1e-9, xi, R2) == pytest.approx(-1.0, abs=1e-8)
+
+
+# The error values: both signs, 0, the linear zone's edge (0.02), xi (0.5) and beyond.
+E = np.array([-2.0, -0.5, -0.3, -0.02, -0.013, -1e-9, 0.0, 1e-9, 0.004, 0.02, 0.021, 0.49,
+              0.5, 0.5000001, 3.0])
+
+
+@pytest.mark.parametrize('name, on_floats, on_arrays', [
+    ('sig_pow', lambda e: sig_pow(e, R2), lambda e: sig_pow(e, R2, ARRAYS)),
+    ('alpha', lambda e: bounded_rate(e, 0.5, R2), lambda e: bounded_rate(e, 0.5, R2, xp=ARRAYS)),
+    ('alpha, linear zone', lambda e: bounded_rate(e, 0.5, R2, 0.02),
+     lambda e: bounded_rate(e, 0.5, R2, 0.02, ARRAYS)),
+    ('sign', sign, lambda e: saturated_sign(e, 0.0, ARRAYS)),
+    ('sat', lambda e: saturated_sign(e, 0.02), lambda e: saturated_sign(e, 0.02, ARRAYS)),
+    ('eq. 32', lambda e: sliding_variable(e, 0.1, 0.6, 1.5),
+     lambda e: sliding_variable(e, 0.1, 0.6, 1.5)),
+    ('eqs 34, 35', lambda e: position_input(0.3, e, -0.2, 0.6, 1.0, R2, 1.0),
+     lambda e: position_input(0.3, e, -0.2, 0.6, 1.0, R2, 1.0, ARRAYS)),
+    ('eq. 11', lambda e: yaw_rate_command(0.1, e, 0.7, 1.0, 23 / 33),
+     lambda e: yaw_rate_command(0.1, e, 0.7, 1.0, 23 / 33, xp=ARRAYS)),
+    ('eq. 11, layer', lambda e: yaw_rate_command(0.1, e, 0.7, 1.0, 23 / 33, 0.02),
+     lambda e: yaw_rate_command(0.1, e, 0.7, 1.0, 23 / 33, 0.02, ARRAYS)),
+    ('eq. 12', lambda e: adaptation_rate(abs(e), 1.0, 1.2),
+     lambda e: adaptation_rate(np.abs(e), 1.0, 1.2)),
+    ('eq. 13', lambda e: barrier_gain(abs(e) * 0.01, 1.0, 0.05),
+     lambda e: barrier_gain(np.abs(e) * 0.01, 1.0, 0.05)),
+])
+def test_each_equation_gives_on_arrays_what_it_gives_on_floats(name, on_floats, on_arrays):
+    # One source for the control loops (floats) and the batch simulator (arrays); numpy's
+    # sin and pow and scipy's erf may differ from libm's in the last bit.
+    by_float = np.array([on_floats(float(e)) for e in E])
+    np.testing.assert_allclose(on_arrays(E), by_float, rtol=4e-16, atol=0.0, err_msg=name)
+
+
+def test_the_barrier_phase_starts_at_half_eps_and_ends_at_eps():
+    eps = 0.01
+    s = np.array([0.004, 0.005, 0.006, 0.0099, 0.01, 0.2])
+    # From the integral phase only |s| <= eps/2 enters the barrier phase (t_bar) ...
+    entered = [True, True, False, False, False, False]
+    # ... which |s| < eps keeps, and |s| >= eps leaves (doc/design.md, D6).
+    kept = [True, True, True, True, False, False]
+    for was, expected in ((False, entered), (True, kept)):
+        assert [in_barrier_phase(was, a, eps) for a in s.tolist()] == expected
+        np.testing.assert_array_equal(in_barrier_phase(np.full(len(s), was), s, eps), expected)

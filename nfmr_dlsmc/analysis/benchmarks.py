@@ -2,7 +2,9 @@
 Benchmarks that measure numbers (``nfmr-bench``, ``make bench``); no pass/fail here.
 
 - kinematic closed loop, scalar: controller + plant steps per second on the 100 s paper
-  Case 1 (100 000 steps, full telemetry recorded), best of ``repeat`` runs of CPU time;
+  Case 1 (100 000 steps, full telemetry recorded), best of ``repeat`` runs of CPU time, and
+  its ratio to the same law written as one plain loop
+  (:func:`~nfmr_dlsmc.analysis.plain_loop.plain_dlsmc_loop`) timed in the same runs;
 - compute per tick of the DLSMC and every comparison law: p50 / p99 in microseconds
   over the same poses;
 - pybullet chassis world under a constant command (what a lockstep step costs apart from
@@ -17,6 +19,7 @@ The figures of the running nodes are :mod:`nfmr_dlsmc.ros.bench`'s.
 
 import time
 
+from nfmr_dlsmc.analysis.plain_loop import plain_dlsmc_loop
 from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig
@@ -30,19 +33,31 @@ import numpy as np
 
 #: Width of the label column of :func:`benchmark_table`.
 _LABEL_WIDTH = 44
+#: The paper's Case 1: the start (x, y, theta) [m, m, rad] and the duration [s].
+_CASE1_START, _CASE1_DURATION = (1.0, 4.0, 0.0), 100.0
 
 
 def kinematic_steps_per_second(repeat: int) -> dict:
-    """Return the best-of-``repeat`` CPU throughput of :func:`simulate` on the paper Case 1."""
+    """
+    Return the best-of-``repeat`` CPU throughput of :func:`simulate` on the paper Case 1.
+
+    Each repetition also runs the plain loop of the same law
+    (:func:`~nfmr_dlsmc.analysis.plain_loop.plain_dlsmc_loop`), so that both see the same
+    machine; ``ratio_to_plain_loop`` is the package's steps per second over the plain loop's.
+    """
     controller, sine = DlsmcController(), make_trajectory('sine')
-    cpu = []
+    cpu, plain = [], []
     steps = 0
     for _ in range(repeat):
         start = time.process_time()
-        steps = len(simulate(controller, sine, (1.0, 4.0, 0.0), 100.0).t)
+        steps = len(simulate(controller, sine, _CASE1_START, _CASE1_DURATION).t)
         cpu.append(time.process_time() - start)
+        start = time.process_time()
+        plain_dlsmc_loop(sine, _CASE1_START, _CASE1_DURATION)
+        plain.append(time.process_time() - start)
     return {'steps': steps, 'cpu_s_best': min(cpu), 'cpu_s_median': float(np.median(cpu)),
-            'steps_per_s': steps / min(cpu)}
+            'steps_per_s': steps / min(cpu), 'plain_loop_steps_per_s': steps / min(plain),
+            'ratio_to_plain_loop': min(plain) / min(cpu)}
 
 
 def controller_tick_us(steps: int = 100_000) -> dict:
@@ -115,6 +130,9 @@ def benchmark_table(figures: dict) -> str:
     batch = figures['batch']
     lines = [f"{'figure':<{w}} {'value':>12}  target",
              f"{'kinematic closed loop [steps/s]':<{w}} {kin['steps_per_s']:>12,.0f}  >= 300,000",
+             f"{'  the same law as one plain loop [steps/s]':<{w}} "
+             f"{kin['plain_loop_steps_per_s']:>12,.0f}",
+             f"{'  closed loop / plain loop [-]':<{w}} {kin['ratio_to_plain_loop']:>12.2f}",
              f"{'100 s paper case, best CPU [s]':<{w}} {kin['cpu_s_best']:>12.3f}  < 1"]
     for name, figure in figures['controller_tick'].items():
         lines.append(f"{name + ' compute per tick p50 / p99 [us]':<{w}} "

@@ -3,9 +3,70 @@
 import math
 
 from nfmr_dlsmc.core.gains import adapted_rates, OuterLoopGains
-from nfmr_dlsmc.core.sliding_functions import bounded_rate, bounded_rate_slope, reaching_term_slope
+from nfmr_dlsmc.core.sliding_functions import bounded_rate, bounded_rate_slope, Elementwise, FLOATS
 
-__all__ = ['BtintsmcOuterLoop']
+__all__ = ['BtintsmcOuterLoop', 'position_input', 'reaching_term_slope', 'sliding_variable']
+
+_TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
+
+
+def sliding_variable(e, e0, rate, integral):
+    """
+    Return s = e - e(0) + C int_0^t alpha(e) dtau of eq. (32) [m], on floats or arrays.
+
+    ``e``, ``e0``: the error on one axis now and at t = 0 [m]; ``rate``: C [m/s];
+    ``integral``: the integral of alpha(e) so far [s].
+    """
+    return e - e0 + rate * integral
+
+
+def position_input(velocity_d, s, alpha, rate, k2, r: float, h: float,
+                   xp: Elementwise = FLOATS):
+    """
+    Return the virtual velocity input of eq. (34) or (35) on one axis [m/s].
+
+    u_x = v_d cos(theta_r) - k2 |s_x|^(q3/p3) erf(h s_x) - C1 alpha(x_e)  (eq. 34),
+
+    and likewise u_y with v_d sin(theta_r), s_y, C2 and alpha(y_e) (eq. 35); the second
+    term is the reaching term k2 g(s), g(s) = |s|^(q3/p3) erf(h s).
+
+    Parameters
+    ----------
+    velocity_d : float or ndarray
+        The reference velocity on the axis, xdot_d = v_d cos(theta_r) or ydot_d [m/s].
+    s : float or ndarray
+        The sliding variable of eq. (32) [m].
+    alpha : float or ndarray
+        alpha(e) of eq. (33) [-].
+    rate : float or ndarray
+        C1 or C2 [m/s].
+    k2 : float or ndarray
+        The reaching gain [m^(1 - r)/s].
+    r : float
+        q3/p3.
+    h : float
+        The slope of erf [1/m] (doc/design.md, D4).
+    xp : Elementwise
+        The functions of libm for the kind of ``s``.
+
+    """
+    return velocity_d - k2 * abs(s) ** r * xp.erf(h * s) - rate * alpha
+
+
+def reaching_term_slope(s: float, k2: float, r: float, h: float) -> float:
+    """
+    Return d(k2 g)/ds [1/s] of the reaching term k2 g(s) = k2 |s|^r erf(h s) of eq. (34).
+
+    k2 g'(s) = k2 (r |s|^(r-1) |erf(h s)| + |s|^r (2 h / sqrt(pi)) exp(-h^2 s^2)),
+
+    finite everywhere (erf(h s) ~ 2 h s / sqrt(pi) near 0, so g'(s) ~ |s|^r -> 0). For
+    the analytic thetadot_d (doc/design.md, D5), on floats.
+    """
+    a = abs(s)
+    if a == 0.0:
+        return 0.0
+    return k2 * (r * a ** (r - 1.0) * abs(math.erf(h * s))
+                 + a ** r * _TWO_OVER_SQRT_PI * h * math.exp(-h * h * s * s))
 
 
 class BtintsmcOuterLoop:
@@ -23,6 +84,9 @@ class BtintsmcOuterLoop:
 
     with v_d cos(theta_r) = xdot_d and v_d sin(theta_r) = ydot_d (eqs 6, 7). The integral
     is a left Riemann sum: alpha of step k, times the time to step k+1, enters at step k+1.
+    The equations are :func:`sliding_variable`,
+    :func:`~nfmr_dlsmc.core.sliding_functions.bounded_rate` and :func:`position_input`,
+    which the batch simulator applies to arrays.
 
     With ``gains.adaptive_ratio`` the rates C1, C2 are re-proportioned to e(0) at the
     first step (:func:`~nfmr_dlsmc.core.gains.adapted_rates`). With ``gains.linear_zone`` > 0,
@@ -94,9 +158,8 @@ class BtintsmcOuterLoop:
         g = self._gains
         s_x, s_y = self._surfaces(x_e, y_e, dt)
         r3, k2, h = self._r3, g.k2, g.h
-        u_x = xdot_d - k2 * abs(s_x) ** r3 * math.erf(h * s_x) - self.C1 * self.alpha_x
-        u_y = ydot_d - k2 * abs(s_y) ** r3 * math.erf(h * s_y) - self.C2 * self.alpha_y
-        return u_x, u_y
+        return (position_input(xdot_d, s_x, self.alpha_x, self.C1, k2, r3, h),
+                position_input(ydot_d, s_y, self.alpha_y, self.C2, k2, r3, h))
 
     def _surfaces(self, x_e: float, y_e: float, dt: float) -> tuple[float, float]:
         """Advance the integrals of eq. (32) and return (s_x, s_y) [m]; sets alpha_x, alpha_y."""
@@ -112,8 +175,8 @@ class BtintsmcOuterLoop:
         self._x_e, self._y_e = x_e, y_e
         self.alpha_x = bounded_rate(x_e, g.xi, self._r2, self._zone)
         self.alpha_y = bounded_rate(y_e, g.xi, self._r2, self._zone)
-        self.s_x = x_e - self._ex0 + self.C1 * self._int_ax
-        self.s_y = y_e - self._ey0 + self.C2 * self._int_ay
+        self.s_x = sliding_variable(x_e, self._ex0, self.C1, self._int_ax)
+        self.s_y = sliding_variable(y_e, self._ey0, self.C2, self._int_ay)
         return self.s_x, self.s_y
 
     def input_rate(self, xdot_e: float, ydot_e: float, xddot_d: float,
@@ -140,8 +203,8 @@ class BtintsmcOuterLoop:
             slope_x = 0.0
         if slope_y == math.inf:
             slope_y = 0.0
-        udot_x = (xddot_d - k2 * reaching_term_slope(self.s_x, r3, h) * sdot_x
+        udot_x = (xddot_d - reaching_term_slope(self.s_x, k2, r3, h) * sdot_x
                   - self.C1 * slope_x * xdot_e)
-        udot_y = (yddot_d - k2 * reaching_term_slope(self.s_y, r3, h) * sdot_y
+        udot_y = (yddot_d - reaching_term_slope(self.s_y, k2, r3, h) * sdot_y
                   - self.C2 * slope_y * ydot_e)
         return udot_x, udot_y

@@ -1,21 +1,64 @@
-"""Scalar building blocks of the sliding-mode laws."""
+"""
+Building blocks of the sliding-mode laws, each written once for floats and arrays alike.
 
+The control loops step one robot on Python floats, the batch simulator many robots at
+once on numpy arrays; both call these functions (and the loops' own, e.g.
+:func:`~nfmr_dlsmc.core.outer_loop.position_input`). The few elementary functions that
+differ between the two kinds of number come in ``xp`` (the array API's name for an array
+namespace): libm's through the math module and two small helpers for floats
+(:data:`FLOATS`, the default), numpy's and scipy's for arrays (:data:`ARRAYS`).
+Everything else is arithmetic, ``abs`` and comparisons, which both kinds share. Gains and
+exponents are scalars unless a function says otherwise.
+
+:func:`bounded_rate_slope` serves the analytic thetadot_d of the robot profile
+(doc/design.md, D5), which only the control loops have: it takes floats.
+"""
+
+from collections.abc import Callable
 import math
+from typing import NamedTuple
 
-__all__ = ['bounded_rate', 'bounded_rate_slope', 'reaching_term', 'reaching_term_slope',
+import numpy as np
+from scipy import special
+
+__all__ = ['ARRAYS', 'Elementwise', 'FLOATS', 'bounded_rate', 'bounded_rate_slope',
            'saturated_sign', 'sig_pow', 'sign']
 
-_TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
+_HALF_PI = 0.5 * math.pi
 
 
-def sig_pow(s: float, r: float) -> float:
+class Elementwise(NamedTuple):
+    """The elementary functions the laws apply, for one kind of number."""
+
+    sin: Callable
+    erf: Callable
+    copysign: Callable
+    sign: Callable
+    clip: Callable
+
+
+def sign(s: float) -> float:
+    """Return the sign of a float: -1, 0 or 1."""
+    return 1.0 if s > 0.0 else (-1.0 if s < 0.0 else 0.0)
+
+
+def _clip(x: float, low: float, high: float) -> float:
+    """Return x limited to [low, high] (a float; ``min(max(...))`` takes three times as long)."""
+    return low if x < low else (high if x > high else x)
+
+
+#: Python floats: libm through the math module, and the two helpers above.
+FLOATS = Elementwise(math.sin, math.erf, math.copysign, sign, _clip)
+#: numpy arrays (the batch simulator): numpy's ufuncs and scipy's erf.
+ARRAYS = Elementwise(np.sin, special.erf, np.copysign, np.sign, np.clip)
+
+
+def sig_pow(s, r: float, xp: Elementwise = FLOATS):
     """Return sign(s) |s|^r: the sign-preserving power s^(q/p) for odd q, p (doc/design.md, D7)."""
-    if s >= 0.0:
-        return s ** r
-    return -((-s) ** r)
+    return xp.copysign(abs(s) ** r, s)
 
 
-def bounded_rate(e: float, xi: float, r: float, linear_zone: float = 0.0) -> float:
+def bounded_rate(e, xi, r: float, linear_zone: float = 0.0, xp: Elementwise = FLOATS):
     """
     Return alpha(e) of eq. (33): the bounded time-varying rate of the BTINTSMC surface.
 
@@ -29,23 +72,24 @@ def bounded_rate(e: float, xi: float, r: float, linear_zone: float = 0.0) -> flo
 
     Parameters
     ----------
-    e : float
+    e : float or ndarray
         Position error on one axis [m].
-    xi : float
-        Phase boundary [m].
+    xi : float or ndarray
+        Phase boundary [m] (one per robot in the batch).
     r : float
         Exponent q2/p2.
     linear_zone : float
         Half-width d of the linear segment [m], 0 <= d < xi; 0 is the paper's alpha.
+    xp : Elementwise
+        The elementary functions of the kind of ``e``.
 
     """
     a = abs(e)
-    if a > xi:
-        return 1.0 if e > 0.0 else -1.0
-    if a < linear_zone:
-        return e / linear_zone * math.sin(0.5 * math.pi * (linear_zone / xi) ** r)
-    value = math.sin(0.5 * math.pi * (a / xi) ** r)
-    return value if e >= 0.0 else -value
+    # |e| clipped to xi: sin(pi/2) = 1 beyond; and to d from below in the linear zone.
+    curve = xp.sin(_HALF_PI * (xp.clip(a, linear_zone, xi) / xi) ** r)
+    if linear_zone > 0.0:
+        curve = curve * xp.clip(a / linear_zone, 0.0, 1.0)  # the chord alpha(d) |e| / d
+    return xp.copysign(curve, e)
 
 
 def bounded_rate_slope(e: float, xi: float, r: float, linear_zone: float) -> float:
@@ -67,37 +111,12 @@ def bounded_rate_slope(e: float, xi: float, r: float, linear_zone: float) -> flo
             * a ** (r - 1.0) / xi ** r)
 
 
-def reaching_term(s: float, r: float, h: float) -> float:
-    """Return g(s) = |s|^r erf(h s): the reaching term of eqs (34), (35) without its gain [m^r]."""
-    return abs(s) ** r * math.erf(h * s)
-
-
-def reaching_term_slope(s: float, r: float, h: float) -> float:
-    """
-    Return dg/ds [m^(r-1)] of the reaching term g(s) = |s|^r erf(h s).
-
-    g'(s) = r |s|^(r-1) |erf(h s)| + |s|^r (2 h / sqrt(pi)) exp(-h^2 s^2),
-
-    finite everywhere (erf(h s) ~ 2 h s / sqrt(pi) near 0, so g'(s) ~ |s|^r -> 0).
-    """
-    a = abs(s)
-    if a == 0.0:
-        return 0.0
-    return (r * a ** (r - 1.0) * abs(math.erf(h * s))
-            + a ** r * _TWO_OVER_SQRT_PI * h * math.exp(-h * h * s * s))
-
-
-def sign(s: float) -> float:
-    """Return the sign of s: -1, 0 or 1."""
-    return 1.0 if s > 0.0 else (-1.0 if s < 0.0 else 0.0)
-
-
-def saturated_sign(s: float, layer: float) -> float:
+def saturated_sign(s, layer: float, xp: Elementwise = FLOATS):
     """
     Return sat(s / layer): the boundary-layer sign (Slotine & Li 1991, section 7.3).
 
     Linear inside |s| < layer, sign(s) outside; ``layer`` = 0 gives the plain sign(s).
     """
-    if abs(s) >= layer:
-        return sign(s)
-    return s / layer
+    if layer > 0.0:
+        return xp.copysign(xp.clip(abs(s) / layer, 0.0, 1.0), s)
+    return xp.sign(s)

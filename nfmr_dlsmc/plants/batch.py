@@ -3,22 +3,29 @@ The DLSMC closed loop for many robots at once: one vectorised numpy step for all
 
 The same laws, saturation and forward-Euler kinematics as
 :class:`~nfmr_dlsmc.core.dlsmc.DlsmcController` with :func:`~nfmr_dlsmc.plants.kinematic.simulate`,
-each robot with its own integrals, adaptive phase and e(0); only erf comes from scipy
-instead of libm (they differ in the last bit for some arguments). Metrics are accumulated
-on the fly, so thousands of robots fit in memory.
+each robot with its own integrals, adaptive phase and e(0): the equations are the loops'
+own functions (:mod:`~nfmr_dlsmc.core.outer_loop`, :mod:`~nfmr_dlsmc.core.inner_loop`,
+:mod:`~nfmr_dlsmc.core.sliding_functions`) applied to arrays, with numpy's and scipy's
+elementary functions in place of libm's (pow, sin, erf: they differ in the last bit for
+some arguments). Metrics are accumulated on the fly, so thousands of robots fit in memory.
 """
 
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, fields
-import math
 
 from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.gains import adapted_rates, DlsmcConfig
-from nfmr_dlsmc.core.inner_loop import BARRIER_PHASE, INTEGRAL_PHASE
+from nfmr_dlsmc.core.inner_loop import (
+    adaptation_rate,
+    barrier_gain,
+    in_barrier_phase,
+    yaw_rate_command,
+)
 from nfmr_dlsmc.core.metrics import CONVERGENCE_TOLERANCE
+from nfmr_dlsmc.core.outer_loop import position_input, sliding_variable
+from nfmr_dlsmc.core.sliding_functions import ARRAYS, bounded_rate
 from nfmr_dlsmc.core.validation import check_positive, ParameterError
 import numpy as np
-from scipy.special import erf
 
 
 @dataclass(frozen=True)
@@ -46,11 +53,6 @@ class BatchResult:
     max_v: np.ndarray
     max_abs_omega: np.ndarray
     states: np.ndarray | None = None
-
-
-def _sig_pow(s, r):
-    """Return sign(s) |s|^r element-wise (doc/design.md, D7)."""
-    return np.sign(s) * np.abs(s) ** r
 
 
 #: Outer-loop gains that may differ per robot (see ``outer`` of :func:`simulate_batch`).
@@ -143,7 +145,7 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     int_ax, int_ay = np.zeros(n), np.zeros(n)
     alpha_x, alpha_y = np.zeros(n), np.zeros(n)
     eta_int, eta_rate = np.zeros(n), np.zeros(n)
-    phase = np.full(n, INTEGRAL_PHASE)
+    barrier = np.zeros(n, dtype=bool)  # eta_hat in its barrier phase
     theta_d_prev, thdot = np.zeros(n), np.zeros(n)
     filter_gain = dt / (config.thetadot_filter + dt)
     iae, ise, sum_d, sum_d2 = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
@@ -151,11 +153,6 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     max_v, max_w = np.zeros(n), np.zeros(n)
     states = np.empty((n_steps, n, 3)) if record else None
     ex0 = ey0 = None
-
-    def bounded_rate(e):
-        a = np.abs(e)
-        inside = np.sin(0.5 * math.pi * (np.minimum(a, xi) / xi) ** r2)
-        return np.sign(e) * np.where(a > xi, 1.0, inside)
 
     for k in range(n_steps):
         x_d, y_d, xdot_d, ydot_d = ref[0][k], ref[1][k], ref[2][k], ref[3][k]
@@ -171,11 +168,12 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
         else:
             int_ax += alpha_x * dt
             int_ay += alpha_y * dt
-        alpha_x, alpha_y = bounded_rate(x_e), bounded_rate(y_e)
-        s_x = x_e - ex0 + C1 * int_ax
-        s_y = y_e - ey0 + C2 * int_ay
-        u_x = xdot_d - k2 * np.abs(s_x) ** r3 * erf(o.h * s_x) - C1 * alpha_x
-        u_y = ydot_d - k2 * np.abs(s_y) ** r3 * erf(o.h * s_y) - C2 * alpha_y
+        alpha_x = bounded_rate(x_e, xi, r2, xp=ARRAYS)
+        alpha_y = bounded_rate(y_e, xi, r2, xp=ARRAYS)
+        s_x = sliding_variable(x_e, ex0, C1, int_ax)
+        s_y = sliding_variable(y_e, ey0, C2, int_ay)
+        u_x = position_input(xdot_d, s_x, alpha_x, C1, k2, r3, o.h, ARRAYS)
+        u_y = position_input(ydot_d, s_y, alpha_y, C2, k2, r3, o.h, ARRAYS)
         theta_d = np.arctan2(u_y, u_x)
         if k > 0:
             raw = wrap_angles(theta_d - theta_d_prev) / dt
@@ -185,17 +183,12 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
         s_th = wrap_angles(th - theta_d)
         a = np.abs(s_th)
         eta_int += eta_rate * dt
-        phase = np.where((phase == BARRIER_PHASE) & (a >= i.eps), INTEGRAL_PHASE,
-                         np.where((phase == INTEGRAL_PHASE) & (a <= 0.5 * i.eps),
-                                  BARRIER_PHASE, phase))
-        integrating = phase == INTEGRAL_PHASE
+        barrier = in_barrier_phase(barrier, a, i.eps)
         with np.errstate(divide='ignore', invalid='ignore'):
-            barrier = i.lam * a / (i.eps - a)
-        eta = np.where(integrating, eta_int, barrier)
-        sign = np.sign(s_th)
-        omega_raw = thdot - i.k1 * _sig_pow(s_th, r1) - eta * sign
+            eta = np.where(barrier, barrier_gain(a, i.lam, i.eps), eta_int)
+        omega_raw = yaw_rate_command(thdot, s_th, eta, i.k1, r1, xp=ARRAYS)
         held = (np.abs(omega_raw) > lim.omega_max) if i.anti_windup else False
-        eta_rate = np.where(integrating & ~held, i.L0 + i.L1 * a, 0.0)
+        eta_rate = np.where(barrier | held, 0.0, adaptation_rate(a, i.L0, i.L1))
         v = np.clip(np.hypot(u_x, u_y), lim.v_min, lim.v_max)
         w = np.clip(omega_raw, -lim.omega_max, lim.omega_max)
         # Metrics of this step, then forward Euler of eq. (3).

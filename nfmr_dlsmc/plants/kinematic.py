@@ -154,17 +154,28 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
     step = controller.step
     telemetry = controller.telemetry
     cos, sin = math.cos, math.sin
-    rows = []
-    record = rows.append
-    for (x_d, y_d, xdot_d, ydot_d), (xddot_d, yddot_d), varpi in zip(
-            ref.tolist(), acc.tolist(), dist.tolist()):
-        v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
-        record((x, y, theta, v, w) + telemetry())
-        x += v * cos(theta) * dt
-        y += v * sin(theta) * dt
-        theta += (w + varpi) * dt
+    width = 5 + len(controller.TELEMETRY_FIELDS)
+    rows = np.empty((n, width))
+    inputs = [*ref.T.tolist(), *acc.T.tolist(), dist.tolist()]  # a list of floats per column
+    # The steps' rows go to a flat list of floats, made rows of the array every `block` steps
+    # while those floats are still in the cache (converted at the end of a 100 s run, they
+    # took a tenth of the time). No container object outlives its step, so the cyclic
+    # garbage collector does not run (a list per row made it take a sixth of the time).
+    block = 1024
+    for start in range(0, n, block):
+        stop = min(start + block, n)
+        log = []
+        record = log.extend
+        for x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d, varpi in zip(
+                *(column[start:stop] for column in inputs)):
+            v, w = step(x, y, theta, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
+            record((x, y, theta, v, w) + telemetry())
+            x += v * cos(theta) * dt
+            y += v * sin(theta) * dt
+            theta += (w + varpi) * dt
+        rows[start:stop] = np.array(log, dtype=float).reshape(stop - start, width)
 
-    columns = np.array(rows, dtype=float).reshape(n, 5 + len(controller.TELEMETRY_FIELDS)).T
+    columns = rows.T
     return SimResult(
         t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[4],
         disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])),
