@@ -6,11 +6,14 @@ from pathlib import Path
 import subprocess
 import sys
 
+from nfmr_dlsmc.bag.reader import read_bag
 from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.plants.kinematic import simulate
+from nfmr_dlsmc.ros.animation_tracks import state_track
+from nfmr_dlsmc.ros.run_series import state_series
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS
 import numpy as np
 import pytest
@@ -140,8 +143,6 @@ def test_unreadable_inputs_get_one_line(tmp_path, make, needle):
 
 def test_bag_without_the_state_topic_names_what_is_missing(case1, tmp_path):
     from nav_msgs.msg import Odometry
-    from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
-    from rclpy.serialization import serialize_message
 
     with BagWriter(tmp_path / 'odom_only') as writer:
         writer.add_topic('/odom', 'nav_msgs/msg/Odometry', [QosProfile()])
@@ -176,6 +177,16 @@ def test_stray_messages_on_the_state_topic_are_skipped_and_counted(case1, tmp_pa
     assert stray.returncode == 0, stray.stderr
     assert '3 /controller_state messages of another shape' in stray.stderr
     assert last_json(stray)['bags'][0]['metrics'] == last_json(clean)['bags'][0]['metrics']
+    # The animation's reference track too: each kept row with its own log time (the strays
+    # shifted those of every later row and the track's arrays no longer matched).
+    tracks = []
+    for name in ('clean', 'strays'):
+        contents = read_bag(tmp_path / name)
+        series, _ = state_series(contents)
+        assert len(series['log_time']) == len(series['t'])
+        tracks.append(state_track(contents, series))
+    (t_clean, ref_clean, _), (t_stray, ref_stray, _) = tracks
+    assert np.array_equal(t_clean, t_stray) and np.array_equal(ref_clean, ref_stray)
 
 
 def test_a_run_whose_tracking_started_over_is_measured_on_its_last_segment(case1, tmp_path):

@@ -38,7 +38,7 @@ def state_track(contents: BagContents, state: dict) -> tuple[np.ndarray, np.ndar
     """
     distance = np.hypot(state['x'] - state['x_d'], state['y'] - state['y_d'])
     state_ns = np.round(1e9 * state['t']).astype(np.int64)
-    delay = _recorder_delay([m for m in contents.of(STATE_TOPIC) if len(m.data)], state_ns)
+    delay = _recorder_delay(state['log_time'], state_ns)
     state_ns, reference = _by_time(state_ns, np.column_stack([state['x_d'], state['y_d'],
                                                               distance]))
     return state_ns, reference, delay
@@ -77,7 +77,7 @@ def pose_track(contents: BagContents) -> tuple[str, np.ndarray, np.ndarray, int]
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
         stamps.append(_stamp_ns(msg))
         poses.append((p.x, p.y, yaw_from_quaternion(q.x, q.y, q.z, q.w)))
-    delay = _recorder_delay(messages, stamps)
+    delay = _recorder_delay([m.log_time for m in messages], stamps)
     stamps, poses = _by_time(stamps, poses)
     if not stamps.size:
         raise BagError(f'{contents.path}: no {topic} message has a finite pose')
@@ -179,12 +179,11 @@ def _by_time(stamps_ns, values) -> tuple[np.ndarray, np.ndarray]:
     return stamps_ns[order], values[order]
 
 
-def _recorder_delay(messages: list, stamps_ns) -> int:
+def _recorder_delay(log_ns, stamps_ns) -> int:
     """
     Return the median of log time minus stamp of messages [ns]: the recorder's delay.
 
     The upper median, in integers: as a float, an epoch time in ns is good to 256 ns only.
     """
-    log_ns = np.array([m.log_time for m in messages], dtype=np.int64)
-    delays = np.sort(log_ns - np.asarray(stamps_ns, dtype=np.int64))
+    delays = np.sort(np.asarray(log_ns, dtype=np.int64) - np.asarray(stamps_ns, dtype=np.int64))
     return int(delays[len(delays) // 2])

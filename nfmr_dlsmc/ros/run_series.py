@@ -38,7 +38,8 @@ def state_series(contents: BagContents) -> tuple[dict, int]:
     Returns
     -------
     dict
-        Field name -> values of the well-formed messages.
+        Field name -> values of the well-formed messages, and ``log_time``: the time the
+        recorder logged each of them [ns] (int64).
     int
         How many messages were skipped.
 
@@ -57,19 +58,22 @@ def state_series(contents: BagContents) -> tuple[dict, int]:
     if type_name != 'std_msgs/msg/Float64MultiArray':
         raise BagError(f'{contents.path}: {STATE_TOPIC} has type {type_name}, expected '
                        'std_msgs/msg/Float64MultiArray')
-    decoded = [deserialize_message(m.data, Float64MultiArray) for m in messages if len(m.data)]
-    labelled = next((msg for msg in decoded if msg.layout.dim and msg.layout.dim[0].label),
+    decoded = [(m.log_time, deserialize_message(m.data, Float64MultiArray))
+               for m in messages if len(m.data)]
+    labelled = next((msg for _, msg in decoded if msg.layout.dim and msg.layout.dim[0].label),
                     None)
     names = labelled.layout.dim[0].label.split(',') if labelled else list(STATE_FIELDS)
     missing = [n for n in NEEDED_FIELDS if n not in names]
     if missing:
         raise BagError(f"{contents.path}: {STATE_TOPIC} lacks the fields {', '.join(missing)}")
-    rows = [msg.data for msg in decoded if len(msg.data) == len(names)]
-    if not rows:
+    kept = [(log_time, msg.data) for log_time, msg in decoded if len(msg.data) == len(names)]
+    if not kept:
         raise BagError(f'{contents.path}: no {STATE_TOPIC} message has the {len(names)} '
                        'values of its layout')
-    rows = np.array(rows, dtype=float)
-    return {name: rows[:, i] for i, name in enumerate(names)}, len(messages) - len(rows)
+    rows = np.array([data for _, data in kept], dtype=float)
+    series = {name: rows[:, i] for i, name in enumerate(names)}
+    series['log_time'] = np.array([log_time for log_time, _ in kept], dtype=np.int64)
+    return series, len(messages) - len(rows)
 
 
 def run_notes(skipped: int, segments: int) -> list[str]:
