@@ -23,6 +23,8 @@ from rosbags.typesys import get_typestore, Stores
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from synthetic_bags import odometry_messages, state_rows, write_run_bag
 
+pytestmark = pytest.mark.commands
+
 ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
 
 

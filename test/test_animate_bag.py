@@ -160,6 +160,7 @@ def test_the_robot_drawn_is_the_one_the_recorded_markers_draw(run, tmp_path):
     assert recorded_robot(read_bag(bag, topics=['/controller_state'])) is None
 
 
+@pytest.mark.commands
 def test_analyze_writes_a_gif_of_the_bags_duration_at_the_asked_playback(run, bag, tmp_path):
     out = tmp_path / 'anim' / 'run.gif'
     proc = analyze(bag, '--animate', out, '--animate-speed', 2, '--animate-fps', 5)
@@ -180,6 +181,7 @@ def test_analyze_writes_a_gif_of_the_bags_duration_at_the_asked_playback(run, ba
     assert proc.stdout.startswith('metric')  # the metrics table as without --animate
 
 
+@pytest.mark.commands
 def test_an_mp4_without_ffmpeg_is_refused_in_one_line_before_reading_the_bag(tmp_path):
     # No ffmpeg on this PATH; the bag does not exist, so any work would fail differently.
     out = tmp_path / 'run.mp4'
@@ -191,6 +193,7 @@ def test_an_mp4_without_ffmpeg_is_refused_in_one_line_before_reading_the_bag(tmp
     assert not out.exists()
 
 
+@pytest.mark.commands
 def test_a_bag_without_joint_states_gets_one_line(run, tmp_path):
     bag = _bag(tmp_path / 'no_joints', run, joints=False)
     out = tmp_path / 'run.gif'

@@ -11,6 +11,8 @@ import numpy as np
 from PIL import Image
 import pytest
 
+pytestmark = pytest.mark.long
+
 
 def _line_series(duration_s=10.0, speed=0.4):
     """Return a run along the x axis at ``speed`` [m/s], the wheels swinging +-0.5 rad."""

@@ -15,6 +15,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.sources
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: nfmr_dlsmc's layers, bottom first: a layer may import its own and those before it.

@@ -15,6 +15,8 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.rosbag2 import Reader
 from std_msgs.msg import Float64MultiArray
 
+pytestmark = pytest.mark.commands
+
 REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 
 

@@ -148,3 +148,57 @@ def test_finish_is_idempotent_and_directories_are_never_reused(tmp_path):
     writer.finish()
     with pytest.raises(FileExistsError):
         BagWriter(tmp_path / 'b')
+
+
+# --- BagWriter: the fields rosbag2 reads from metadata.yaml and the MCAP records ------------
+
+def test_bag_metadata_has_the_rosbag2_version_9_layout(tmp_path):
+    directory = tmp_path / 'nested' / 'run'  # parents are created
+    with BagWriter(directory) as writer:
+        writer.add_topic('/a', 'std_msgs/msg/Float64MultiArray', [QosProfile(depth=7)])
+        writer.add_topic('/b', 'std_msgs/msg/Float64MultiArray',
+                         [{'history': 'keep_all', 'depth': 0}])
+        for k, t in enumerate((3_000, 1_000, 2_000)):
+            writer.write('/a', t, b'\x00\x01\x00\x00' + bytes(8),
+                         publish_time_ns=None if k else 42)
+        writer.write('/b', 5_000, b'\x00\x01\x00\x00' + bytes(8))
+    info = yaml.safe_load((directory / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert list(info) == ['version', 'storage_identifier', 'duration', 'starting_time',
+                          'message_count', 'topics_with_message_count', 'compression_format',
+                          'compression_mode', 'relative_file_paths', 'files', 'custom_data',
+                          'ros_distro']  # rosbag2's own order
+    assert info['compression_format'] == '' and info['compression_mode'] == ''
+    assert info['custom_data'] is None and info['ros_distro'] == 'jazzy'
+    assert info['starting_time'] == {'nanoseconds_since_epoch': 1_000}
+    assert info['duration'] == {'nanoseconds': 4_000} and info['message_count'] == 4
+    assert info['files'] == [{'path': 'run_0.mcap',
+                              'starting_time': {'nanoseconds_since_epoch': 1_000},
+                              'duration': {'nanoseconds': 4_000}, 'message_count': 4}]
+    qos_a = info['topics_with_message_count'][0]['topic_metadata']['offered_qos_profiles'][0]
+    assert list(qos_a) == ['history', 'depth', 'reliability', 'durability', 'deadline',
+                           'lifespan', 'liveliness', 'liveliness_lease_duration',
+                           'avoid_ros_namespace_conventions']
+    assert qos_a['depth'] == 7 and qos_a['deadline'] == {'sec': 9223372036, 'nsec': 854775807}
+    qos_b = info['topics_with_message_count'][1]['topic_metadata']['offered_qos_profiles']
+    assert qos_b == [{'history': 'keep_all', 'depth': 0}]
+    with open(directory / 'run_0.mcap', 'rb') as f:
+        reader = make_reader(f)
+        assert reader.get_header().library == 'nfmr'
+        records = [(c.topic, m.sequence, m.log_time, m.publish_time)
+                   for _, c, m in reader.iter_messages(log_time_order=False)]
+        # The mcap summary carries the rosbag2 record with the same, unsorted, metadata.
+        rosbag2 = {r.name: r.metadata for r in reader.iter_metadata()}['rosbag2']
+    assert records == [('/a', 0, 3_000, 42), ('/a', 1, 1_000, 1_000), ('/a', 2, 2_000, 2_000),
+                       ('/b', 0, 5_000, 5_000)]
+    assert rosbag2['ROS_DISTRO'] == 'jazzy'
+    assert list(yaml.safe_load(rosbag2['serialized_metadata']))[:3] == [
+        'version', 'storage_identifier', 'duration']
+
+
+def test_a_bag_of_one_message_lasts_zero_nanoseconds(tmp_path):
+    with BagWriter(tmp_path / 'one') as writer:
+        writer.add_topic('/a', 'std_msgs/msg/Float64MultiArray', [QosProfile()])
+        writer.write('/a', 7_000, b'\x00\x01\x00\x00' + bytes(8))
+    info = yaml.safe_load((tmp_path / 'one' / 'metadata.yaml').read_text())
+    assert info['rosbag2_bagfile_information']['duration'] == {'nanoseconds': 0}
+    assert not (tmp_path / 'one' / 'metadata.yaml.tmp').exists()

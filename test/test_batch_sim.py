@@ -18,6 +18,8 @@ import numpy as np
 import pytest
 import yaml
 
+pytestmark = pytest.mark.cross_check
+
 STARTS = np.array([[1.0, 4.0, 0.0], [4.0, 1.0, 0.0], [-2.0, -1.0, math.pi], [0.2, 0.1, 0.3]])
 
 
@@ -56,6 +58,7 @@ def test_bad_starts_are_rejected():
         simulate_batch(DlsmcConfig(), make_trajectory('sine'), [[math.nan, 0.0, 0.0]], 1.0)
 
 
+@pytest.mark.commands
 def test_montecarlo_reports_success_rate_and_plots(tmp_path):
     exe = Path(sys.executable).parent / 'nfmr-montecarlo'
     proc = subprocess.run([str(exe), '--n', '40', '--seed', '3', '--duration', '30',
@@ -92,6 +95,7 @@ def test_per_robot_gains_equal_separate_runs():
 
 
 @pytest.mark.parametrize('ratio', ['fixed', 'both'])
+@pytest.mark.commands
 def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path, ratio):
     out = tmp_path / 'tuned.yaml'
     bin_dir = Path(sys.executable).parent
@@ -116,6 +120,7 @@ def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path, rati
     assert scalar['t_conv'] == pytest.approx(report['case1_t_conv_tuned'], abs=2e-3)
 
 
+@pytest.mark.commands
 def test_shipped_tuned_gains_beat_the_paper_on_case1(request):
     path = request.config.rootpath / 'config' / 'tuned_outer.yaml'
     proc = subprocess.run([str(Path(sys.executable).parent / 'nfmr-eval'), '--params', str(path),

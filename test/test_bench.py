@@ -49,6 +49,8 @@ def test_the_kinematic_figure_comes_with_its_ratio_to_the_plain_loop():
 
 
 @pytest.mark.slow
+@pytest.mark.ros
+@pytest.mark.commands
 def test_bench_with_nodes_reports_every_figure(tmp_path):
     out = tmp_path / 'bench.json'
     proc = subprocess.run([BENCH, '--nodes', '--seconds', '2', '--repeat', '1',

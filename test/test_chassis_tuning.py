@@ -20,6 +20,8 @@ import optuna
 from optuna.trial import TrialState
 import pytest
 
+pytestmark = [pytest.mark.sim, pytest.mark.commands]
+
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 #: What pybullet itself prints when it is imported; not ours.

@@ -100,6 +100,7 @@ def test_barrier_gain_by_hand():
         assert loop.eta_hat == pytest.approx(eta, rel=1e-9)
 
 
+@pytest.mark.long
 def test_barrier_holds_theta_e_inside_eps_against_a_pulse_a_barrier_free_law_cannot():
     """
     Kills M2 in closed loop (M1 leaves this run unchanged: the unit tests above kill it).
@@ -211,6 +212,7 @@ def test_case1_table2_and_the_inner_loop_figures(case1):
     assert 1.80 <= m.theta_e_iae <= 1.86  # pinned, see docstring
 
 
+@pytest.mark.long
 def test_case2_theta_e_stays_inside_eps_after_convergence():
     """
     Paper Case 2: after convergence |theta_e| < eps = 0.01 rad, the second pulse included.

@@ -12,6 +12,8 @@ from nfmr_dlsmc.plants.kinematic import simulate
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.long
+
 EPS = 0.01  # [rad]
 CASE2_X0 = (1.0, 1.0, math.pi / 6)
 

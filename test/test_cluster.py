@@ -16,6 +16,8 @@ import time
 
 import pytest
 
+pytestmark = pytest.mark.commands
+
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).parents[1] / 'config'
 # The robot profile on the kinematic model: one run per start (the batch simulator takes

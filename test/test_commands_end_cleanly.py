@@ -15,6 +15,8 @@ import time
 import pytest
 from ros_helpers import wait_for
 
+pytestmark = pytest.mark.commands
+
 BIN = Path(sys.executable).parent
 ROOT = Path(__file__).parents[1]
 
@@ -73,6 +75,7 @@ def busy_workers(pid: int, cpu_seconds: float = 0.5) -> int:
     ('nfmr-montecarlo', ['--plant', 'pybullet', '--n', '8', '--duration', '60', '--jobs', '2']),
     ('nfmr-compare', ['--plant', 'pybullet', '--out', '{tmp}/report', '--jobs', '2']),
 ])
+@pytest.mark.sim
 def test_an_interrupt_ends_a_parallel_command_at_once(tmp_path, command, args, sig):
     proc = subprocess.Popen([str(BIN / command), *(a.format(tmp=tmp_path) for a in args)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
@@ -111,6 +114,8 @@ def takes_signal(pid: int, sig: int) -> bool:
 
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.ros
+@pytest.mark.sim
 def test_a_signal_in_the_first_second_ends_a_command_in_one_line(tmp_path, sig):
     # nfmr-run imports numpy, scipy, rclpy and pybullet for about a second before it
     # starts anything: a signal sent as soon as the command takes it lands in there.
@@ -125,6 +130,7 @@ def test_a_signal_in_the_first_second_ends_a_command_in_one_line(tmp_path, sig):
     assert 'interrupted' in stderr and 'Traceback' not in stderr, stderr
 
 
+@pytest.mark.sim
 def test_workers_die_with_a_command_killed_outright(tmp_path):
     # SIGKILL (or a timeout's kill) runs no cleanup in the command: its workers must end
     # by themselves instead of computing on for minutes.

@@ -15,6 +15,8 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.long
+
 #: The hold figures every run of results.json carries.
 HOLD_KEYS = ('t_conv_1cm', 'hold_distance_p99', 'hold_theta_e_p99', 'hold_omega_tv',
              'hold_omega_saturated', 'hold_steer_rate_max', 'hold_steer_joint_rate_max')
@@ -202,6 +204,7 @@ def pybullet_report(tmp_path_factory):
     return out
 
 
+@pytest.mark.sim
 def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
     assert document['plant'] == 'pybullet'
@@ -217,6 +220,7 @@ def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_repor
                 assert figures['hold_steer_joint_rate_max'] is not None  # measured joints
 
 
+@pytest.mark.sim
 def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
     for case, start in (('case1', '1,4,0'), ('case1', '4,1,0'), ('case2', '1,1,0.523599')):
@@ -231,6 +235,7 @@ def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybul
     assert case1['dlsmc']['hold_steer_joint_rate_max'] > 15.0  # at the 20 rad/s cap
 
 
+@pytest.mark.sim
 def test_with_sensing_every_law_sees_the_robots_odometry(tmp_path, pybullet_report):
     out = tmp_path / 'good'
     assert compare_cli.main(['--plant', 'pybullet', '--sensing', 'good', '--duration', '16',
@@ -255,6 +260,7 @@ def test_sensing_on_the_kinematic_plant_is_refused(capsys):
     assert '--sensing applies to --plant pybullet' in capsys.readouterr().err
 
 
+@pytest.mark.sim
 def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
     text = (pybullet_report / 'report.md').read_text()

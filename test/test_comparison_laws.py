@@ -43,6 +43,8 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.long
+
 DT = 0.001
 WIDE = InputLimits(v_min=1e-6, v_max=1e6, omega_max=1e6)  # saturation out of the way
 

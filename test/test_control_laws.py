@@ -5,7 +5,11 @@ import math
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop, BARRIER_PHASE, INTEGRAL_PHASE
-from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
+from nfmr_dlsmc.core.outer_loop import (
+    BtintsmcOuterLoop,
+    position_input,
+    reaching_term_slope,
+)
 import pytest
 
 DT = 0.001
@@ -206,3 +210,41 @@ def test_outer_loop_with_adaptive_ratio_uses_the_adapted_rates_from_the_first_st
     assert loop.s_y == pytest.approx(3.9 - 4.0 + c2 * DT)
     loop.reset()
     assert (loop.C1, loop.C2) == (0.6, 0.6)
+
+
+# --- position_input, eqs (34), (35): u = v_d - k2 |s|^r erf(h s) - C alpha ----------------------
+
+def reaching_term(s, k2, r, h):
+    """Return k2 |s|^r erf(h s) as eq. (34) subtracts it: from the law, with v_d = C = 0."""
+    return -position_input(0.0, s, 0.0, 0.0, k2, r, h)
+
+
+def test_the_reaching_term_is_the_odd_power_erf_product():
+    # |0.25|^0.5 = 0.5; erf(2 * 0.25) = erf(0.5) = 0.5204998778130465
+    assert math.isclose(reaching_term(0.25, 1.0, 0.5, 2.0), 0.5 * 0.5204998778130465,
+                        rel_tol=1e-12)
+    assert math.isclose(reaching_term(-0.25, 1.0, 0.5, 2.0), -0.5 * 0.5204998778130465,
+                        rel_tol=1e-12)
+    # |4|^0.5 = 2; erf(0.1 * 4) = erf(0.4) = 0.42839235504666845; k2 = 3 scales it.
+    assert math.isclose(reaching_term(4.0, 3.0, 0.5, 0.1), 6.0 * 0.42839235504666845,
+                        rel_tol=1e-12)
+    assert reaching_term(0.0, 1.0, 0.5, 2.0) == 0.0
+
+
+def test_position_input_subtracts_the_reaching_term_and_the_rate_term():
+    # v_d = 0.4 m/s, s = 0.25 m, alpha = 0.5, C = 0.6 m/s, k2 = 2: 0.4 - 2 * 0.5 * erf(0.5) - 0.3
+    u = position_input(0.4, 0.25, 0.5, 0.6, 2.0, 0.5, 2.0)
+    assert math.isclose(u, 0.4 - 2.0 * 0.5 * 0.5204998778130465 - 0.6 * 0.5, rel_tol=1e-12)
+
+
+@pytest.mark.parametrize('s', [0.3, -0.3, 2.0, -0.01])
+def test_reaching_term_slope_is_the_derivative_of_the_reaching_term(s):
+    k2, r, h = 1.5, 0.5, 2.0
+    a = abs(s)
+    by_hand = k2 * (r * a ** (r - 1.0) * abs(math.erf(h * s))
+                    + a ** r * 2.0 * h / math.sqrt(math.pi) * math.exp(-(h * s) ** 2))
+    assert math.isclose(reaching_term_slope(s, k2, r, h), by_hand, rel_tol=1e-12)
+    step = 1e-7
+    numeric = (reaching_term(s + step, k2, r, h) - reaching_term(s - step, k2, r, h)) / (2 * step)
+    assert math.isclose(reaching_term_slope(s, k2, r, h), numeric, rel_tol=1e-5)
+    assert reaching_term_slope(0.0, k2, r, h) == 0.0

@@ -28,6 +28,8 @@ from ros_helpers import new_context, settled, Spinner, wait_for
 from test_controller_node import ConsoleLog, drive, Peer
 from visualization_msgs.msg import MarkerArray
 
+pytestmark = pytest.mark.ros
+
 LATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
@@ -212,6 +214,7 @@ def test_a_bad_parameter_fails_configure_and_the_node_stays_unconfigured(system,
     assert client.change('configure') and client.state() == 'inactive'
 
 
+@pytest.mark.commands
 def test_autostart_reaches_active_by_itself():
     proc = subprocess.Popen([sys.executable, '-m', 'nfmr_dlsmc.ros.controller_node'],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,

@@ -20,6 +20,8 @@ from ros_helpers import new_context, Spinner, wait_for, wait_matched
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
 
+pytestmark = pytest.mark.ros
+
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 

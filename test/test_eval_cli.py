@@ -8,6 +8,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.commands
+
 
 def run_eval(*args, cwd=None):
     return subprocess.run([sys.executable, '-m', 'nfmr_dlsmc.cli.eval', *args],

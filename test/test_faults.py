@@ -22,7 +22,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
 from test_run import LoggedRun, wait_for_child
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.ros, pytest.mark.sim, pytest.mark.commands]
 ANALYZE = str(Path(sys.executable).parent / 'nfmr-analyze')
 REINDEX = str(Path(sys.executable).parent / 'nfmr-reindex')
 

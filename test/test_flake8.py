@@ -9,6 +9,7 @@ import pytest
 
 @pytest.mark.flake8
 @pytest.mark.linter
+@pytest.mark.sources
 def test_flake8():
     # In a process of its own: flake8 forks its workers, and a fork of this process would
     # inherit the rclpy objects of earlier tests, whose collection there crashes the worker

@@ -6,6 +6,9 @@ import subprocess
 import sys
 
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
+import pytest
+
+pytestmark = [pytest.mark.ros, pytest.mark.commands]
 
 PREFIX = Path(sys.prefix)
 

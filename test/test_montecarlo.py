@@ -15,6 +15,8 @@ from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.long
+
 ROBOT = 'config/robot_case1.yaml'
 
 
@@ -23,6 +25,7 @@ def _summary(capsys, *argv) -> dict:
     return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
 
 
+@pytest.mark.sim
 def test_pybullet_success_rate_is_that_of_the_starts(capsys):
     # Seed 0 in +-1 m, +-0.3 rad: one start settles within 5 s, the other (ahead of the
     # reference) needs about 11 s, so with 12 s runs and a 3 s hold window one succeeds.

@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+pytestmark = [pytest.mark.ros, pytest.mark.commands]
+
 BIN = Path(sys.executable).parent
 
 CASES = [

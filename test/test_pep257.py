@@ -7,6 +7,7 @@ import pytest
 
 @pytest.mark.linter
 @pytest.mark.pep257
+@pytest.mark.sources
 def test_pep257():
     rc = main(argv=LINTED)
     assert rc == 0, 'Found code style errors / warnings'

@@ -12,6 +12,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_helpers import new_context, Spinner, wait_for, wait_matched
 from std_msgs.msg import Float64MultiArray
 
+pytestmark = pytest.mark.commands
+
 PUBLISH = str(Path(sys.executable).parent / 'nfmr-publish-path')
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -35,6 +37,7 @@ def test_a_file_that_makes_no_path_is_one_line_and_exit_2(tmp_path, text, says):
     assert done.stderr.startswith('nfmr-publish-path: error: ')
 
 
+@pytest.mark.ros
 def test_without_a_controller_it_says_so_after_the_timeout_with_exit_1():
     done = run('paths/warehouse_loop.csv', '--topic', 'nobody_listens', '--timeout', '0.5')
     assert done.returncode == 1
@@ -42,6 +45,7 @@ def test_without_a_controller_it_says_so_after_the_timeout_with_exit_1():
                            '(is a controller active on this ROS domain?)\n')
 
 
+@pytest.mark.ros
 def test_a_running_controller_follows_the_published_file(tmp_path):
     file = tmp_path / 'ahead.csv'
     file.write_text('x,y\n1.0,4.0\n3.0,4.0\n3.0,6.0\n')

@@ -23,6 +23,8 @@ from nfmr_sim.world_config import MotorConfig
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.sim
+
 #: On the sine at t = 0, heading along the tangent: a converged start [m, m, rad].
 ON_PATH = (0.0, 0.0, math.atan2(0.25, 0.5))
 EVAL = str(Path(sys.executable).parent / 'nfmr-eval')
@@ -84,6 +86,7 @@ def test_plant_rejects_a_mapping_that_does_not_fit_the_chassis(constant_inputs):
                           geometry=RobotGeometry(wheelbase=1.2))
 
 
+@pytest.mark.commands
 def test_nfmr_eval_runs_the_pybullet_plant_and_reports_hold_figures():
     proc = subprocess.run([EVAL, '--plant', 'pybullet', '--params', 'config/robot_case1.yaml',
                            '--x0=0,0,0.4636476090008061', '--duration', '6', '--hold-from',

@@ -32,6 +32,8 @@ from std_msgs.msg import String
 from synthetic_bags import write_run_bag
 import yaml
 
+pytestmark = [pytest.mark.ros, pytest.mark.commands]
+
 REPLAY = str(Path(sys.executable).parent / 'nfmr-replay')
 TOPICS = {'/controller_state': 'std_msgs/msg/Float64MultiArray',
           '/odom': 'nav_msgs/msg/Odometry', '/clock': 'rosgraph_msgs/msg/Clock'}

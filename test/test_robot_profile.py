@@ -21,6 +21,8 @@ from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.long
+
 DT = 0.001
 R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
 ROBOT_FILE = 'config/robot_case1.yaml'

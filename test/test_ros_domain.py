@@ -64,6 +64,7 @@ def test_a_fast_dds_profile_the_user_names_is_kept(monkeypatch, tmp_path):
     assert reserve_domain(7).environment()[VARIABLE] == str(own)
 
 
+@pytest.mark.ros
 def test_the_run_profile_announces_often_and_fast_dds_takes_it():
     root = ElementTree.parse(shipped_config(PROFILE)).getroot()
     ns = {'dds': 'http://www.eprosima.com'}

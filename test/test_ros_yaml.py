@@ -46,6 +46,7 @@ def same(ours, theirs) -> bool:
     return ours == theirs
 
 
+@pytest.mark.ros
 def test_every_plain_scalar_is_typed_as_ros_2_types_it(tmp_path):
     values = {f'p{k}': text for k, text in enumerate(SCALARS)}
     theirs = rcl_values(tmp_path, values)
@@ -63,6 +64,7 @@ def read_yaml_values(tmp_path, values: dict) -> dict:
     return read_yaml(path)['probe']['ros__parameters']
 
 
+@pytest.mark.ros
 @settings(max_examples=12, deadline=None)
 @given(st.lists(st.text(alphabet='0123456789+-.eExXpPinfaINFAyYn_', min_size=1, max_size=7)
                 .filter(lambda s: s != '-'),

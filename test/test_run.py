@@ -31,6 +31,8 @@ from rosbags.typesys import get_typestore, Stores
 from std_msgs.msg import Float64MultiArray
 import yaml
 
+pytestmark = [pytest.mark.ros, pytest.mark.sim, pytest.mark.commands]
+
 RUN = str(Path(sys.executable).parent / 'nfmr-run')
 
 

@@ -8,6 +8,8 @@ the circle from (0.5, -0.5, 0), 35 s.
 from nfmr_dlsmc.analysis.evaluation import evaluate, load_evaluation
 import pytest
 
+pytestmark = pytest.mark.sim
+
 HOLD_FROM = 15.0  # [s]
 
 

@@ -23,6 +23,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import MarkerArray
 
+pytestmark = [pytest.mark.ros, pytest.mark.sim]
+
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # Deep enough that a test whose executor falls behind a realtime sim on a busy machine still
 # receives every step (the sim's publishers keep 1000).

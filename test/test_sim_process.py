@@ -15,6 +15,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import SetBool
 from visualization_msgs.msg import MarkerArray
 
+pytestmark = [pytest.mark.ros, pytest.mark.sim, pytest.mark.commands]
+
 SIM = str(Path(sys.executable).parent / 'nfmr-sim')
 
 

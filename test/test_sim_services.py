@@ -11,6 +11,8 @@ from ros_helpers import new_context
 from std_srvs.srv import SetBool, Trigger
 from test_sim_node import start, stop, wait_for
 
+pytestmark = [pytest.mark.ros, pytest.mark.sim]
+
 INITIAL_POSE = (1.0, 4.0, 0.5)  # x [m], y [m], yaw [rad] of P
 MODES = ['lockstep', 'realtime']
 

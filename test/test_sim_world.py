@@ -17,6 +17,8 @@ from nfmr_sim.world_config import (
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.sim
+
 GEOM = RobotGeometry()
 
 

@@ -1,4 +1,4 @@
-"""sig_pow, the bounded rate alpha of eq. (33), and every equation on floats and on arrays."""
+"""sig_pow, alpha of eq. (33) and its slope, and every equation on floats and on arrays."""
 
 import math
 
@@ -12,6 +12,7 @@ from nfmr_dlsmc.core.outer_loop import position_input, sliding_variable
 from nfmr_dlsmc.core.sliding_functions import (
     ARRAYS,
     bounded_rate,
+    bounded_rate_slope,
     saturated_sign,
     sig_pow,
     sign,
@@ -92,3 +93,36 @@ def test_the_barrier_phase_starts_at_half_eps_and_ends_at_eps():
     for was, expected in ((False, entered), (True, kept)):
         assert [in_barrier_phase(was, a, eps) for a in s.tolist()] == expected
         np.testing.assert_array_equal(in_barrier_phase(np.full(len(s), was), s, eps), expected)
+
+
+# --- the slopes of the robot profile's analytic thetadot_d ---------------------------------
+
+@pytest.mark.parametrize('e', [0.5, -0.5, 0.05, 0.9])
+def test_bounded_rate_slope_is_the_derivative_of_eq_33(e):
+    xi, r = 1.0, 0.5
+    a = abs(e)
+    by_hand = 0.5 * math.pi * r * math.cos(0.5 * math.pi * a ** r) * a ** (r - 1.0)
+    assert math.isclose(bounded_rate_slope(e, xi, r, 0.0), by_hand, rel_tol=1e-12)
+    xi2 = 2.0
+    by_hand2 = (0.5 * math.pi * r * math.cos(0.5 * math.pi * (a / xi2) ** r)
+                * a ** (r - 1.0) / xi2 ** r)
+    assert math.isclose(bounded_rate_slope(e, xi2, r, 0.0), by_hand2, rel_tol=1e-12)
+    h = 1e-7
+    numeric = (bounded_rate(e + h, xi2, r) - bounded_rate(e - h, xi2, r)) / (2 * h)
+    assert math.isclose(bounded_rate_slope(e, xi2, r, 0.0), numeric, rel_tol=1e-5)
+
+
+def test_bounded_rate_slope_zones():
+    xi, r, d = 1.0, 0.5, 0.1
+    chord = math.sin(0.5 * math.pi * math.sqrt(0.1)) / 0.1  # alpha(d) / d
+    assert math.isclose(bounded_rate_slope(0.05, xi, r, d), chord, rel_tol=1e-12)
+    assert math.isclose(bounded_rate_slope(-0.05, xi, r, d), chord, rel_tol=1e-12)
+    assert math.isclose(bounded_rate_slope(0.0, xi, r, d), chord, rel_tol=1e-12)
+    assert bounded_rate_slope(0.0, xi, r, 0.0) == math.inf
+    assert bounded_rate_slope(1.5, xi, r, d) == 0.0 and bounded_rate_slope(-1.5, xi, r, d) == 0.0
+    # At |e| = xi the curve is still inside: cos(pi / 2) = 0 up to rounding.
+    assert abs(bounded_rate_slope(1.0, xi, r, d)) < 1e-15
+    # Just outside the linear zone the curve's own slope applies, not the chord.
+    e = 0.1
+    by_hand = 0.5 * math.pi * r * math.cos(0.5 * math.pi * e ** r) * e ** (r - 1.0)
+    assert math.isclose(bounded_rate_slope(e, xi, r, d), by_hand, rel_tol=1e-12)

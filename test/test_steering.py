@@ -7,6 +7,7 @@ from nfmr_dlsmc.core.steering import (
     front_steer_from_yaw_rate,
     geometry_mismatch,
     RobotGeometry,
+    steer_angle_series,
     SteerMode,
     unicycle_from_wheels,
     wheel_commands,
@@ -17,7 +18,8 @@ from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
 
-GEOM = RobotGeometry()
+GEOM = RobotGeometry()  # L = 0.89 m, track 0.53 m
+A, B = 0.5 * 0.89, 0.5 * 0.53  # half wheelbase, half track [m]
 DOUBLE, FRONT = SteerMode(1.0, 0.0), SteerMode(0.0, 1.0)
 CASES = [(1.0, 0.5), (0.2, 1.59), (2.0, -1.59), (0.5, 0.0), (1.3, -0.2), (0.2, -0.05)]
 
@@ -133,3 +135,79 @@ def test_a_chassis_of_other_dimensions_is_named_by_the_first_that_differs():
     assert geometry_mismatch(GEOM, RobotGeometry(wheelbase=0.89 + 1e-10)) is None
     assert geometry_mismatch(GEOM, RobotGeometry(track=0.6, wheel_radius=0.2)) == 'track'
     assert geometry_mismatch(GEOM, RobotGeometry(wheel_radius=0.14 + 2e-9)) == 'wheel_radius'
+
+
+# --- steer_angle_series: the vectorised steer angles of the logs and reports ---------------
+
+def test_double_ackermann_series_points_every_wheel_at_the_turn_centre():
+    # j1 = 1: P is the chassis centre; v = 1 m/s, omega = 0.5 rad/s turn about (0, R = 2 m).
+    # A wheel at (x_i, y_i) is perpendicular to its radius: delta_i = atan(x_i / (R - y_i)).
+    R = 2.0
+    steer = steer_angle_series([1.0], [0.5], GEOM, SteerMode(1.0, 0.0))
+    expected = [math.atan(A / (R - B)), math.atan(A / (R + B)),
+                -math.atan(A / (R - B)), -math.atan(A / (R + B))]
+    assert steer.shape == (1, 4)
+    np.testing.assert_allclose(steer[0], expected, rtol=1e-12)
+
+
+def test_front_only_series_is_plain_ackermann_about_the_rear_axle():
+    # j1 = 0: P is on the rear axle, the turn centre is (-L/2, R); rear wheels stay straight.
+    R = 2.0
+    steer = steer_angle_series([1.0, 1.0], [-0.5, 0.5], GEOM, SteerMode(0.0, 1.0))
+    left_turn = [math.atan(0.89 / (R - B)), math.atan(0.89 / (R + B)), 0.0, 0.0]
+    np.testing.assert_allclose(steer[1], left_turn, rtol=1e-12, atol=1e-15)
+    # The right turn mirrors it: the right wheels are now the inner ones.
+    np.testing.assert_allclose(steer[0], [-left_turn[1], -left_turn[0], 0.0, 0.0],
+                               rtol=1e-12, atol=1e-15)
+
+
+def test_series_folds_reversing_wheels_into_the_half_plane():
+    # Driving backwards the wheels keep pointing forward (angle 0, not +-pi); reversing
+    # through a turn each wheel is at its forward-turn angle mirrored.
+    R = 2.0
+    steer = steer_angle_series([-1.0, -1.0], [0.0, -0.5], GEOM, SteerMode(1.0, 0.0))
+    np.testing.assert_allclose(steer[0], 0.0, atol=1e-15)
+    # v = -1, omega = -0.5: the same circle, R = v / omega = 2 m, driven backwards.
+    expected = [math.atan(A / (R - B)), math.atan(A / (R + B)),
+                -math.atan(A / (R - B)), -math.atan(A / (R + B))]
+    np.testing.assert_allclose(steer[1], expected, rtol=1e-12)
+
+
+def test_series_wheels_that_stand_still_keep_their_last_angle():
+    # Sample 0 stands still (nothing to keep: 0), 1 turns, 2 and 3 stand still (keep 1's
+    # angles), 4 drives straight.
+    R = 2.0
+    v = [0.0, 1.0, 0.0, 0.0, 1.0]
+    omega = [0.0, 0.5, 0.0, 0.0, 0.0]
+    steer = steer_angle_series(v, omega, GEOM, SteerMode(1.0, 0.0))
+    turn = [math.atan(A / (R - B)), math.atan(A / (R + B)),
+            -math.atan(A / (R - B)), -math.atan(A / (R + B))]
+    np.testing.assert_allclose(steer[0], 0.0, atol=1e-15)
+    for k in (1, 2, 3):
+        np.testing.assert_allclose(steer[k], turn, rtol=1e-12)
+    np.testing.assert_allclose(steer[4], 0.0, atol=1e-15)
+
+
+def test_series_spinning_in_place_keeps_only_the_moving_wheels():
+    # v = 0, omega = 1 in double Ackermann: P (the centre) stands, every wheel moves on a
+    # circle about it: perpendicular to its position, folded into [-pi/2, pi/2].
+    # FL at (A, B) moves along (-B, A): atan2(A, -B) = pi - atan(A/B), reversed to
+    # -atan(A/B); FR along (B, A): atan(A/B); RL along (-B, -A): atan(A/B); RR: -atan(A/B).
+    steer = steer_angle_series([0.0], [1.0], GEOM, SteerMode(1.0, 0.0))
+    d = math.atan(A / B)
+    np.testing.assert_allclose(steer[0], [-d, d, d, -d], rtol=1e-12)
+
+
+def test_series_clips_to_the_steer_limit():
+    limit = 0.1
+    geometry = RobotGeometry(steer_limit=limit)
+    R = 2.0
+    steer = steer_angle_series([1.0], [0.5], geometry, SteerMode(1.0, 0.0))
+    # Every wheel of this turn asks for more than 0.1 rad (the smallest is atan(A/(R+B))).
+    assert math.atan(A / (R + B)) > limit
+    np.testing.assert_allclose(steer[0], [limit, limit, -limit, -limit])
+
+
+def test_series_refuses_crab_mode():
+    with pytest.raises(ValueError, match='crab mode'):
+        steer_angle_series([1.0], [0.0], GEOM, SteerMode(-1.0, 2.0))

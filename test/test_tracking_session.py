@@ -1,9 +1,11 @@
 """What the controller does with each kind of odometry (ROS-free session logic)."""
 
+from dataclasses import replace
 import math
-
 from pathlib import Path
 
+from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.gains import DlsmcConfig, InputLimits
 from nfmr_dlsmc.runtime.params import controller_params, ControllerParams, load_params_file
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 import pytest
@@ -13,8 +15,8 @@ ROBOT = controller_params(
     load_params_file(Path(__file__).parents[1] / 'config' / 'robot_case1.yaml'))
 
 
-def session():
-    return TrackingSession(ControllerParams(), odom_timeout=0.1)
+def session(**options):
+    return TrackingSession(ControllerParams(), odom_timeout=0.1, **options)
 
 
 def feed(s, x, y, stamp, frame='odom', wall=None):
@@ -163,3 +165,93 @@ def test_stale_odometry_stops_and_fresh_odometry_resumes():
     assert out.state[T_INDEX] == 0.0  # trajectory time of the last tracking tick
     _, out = feed(s, 1.0, 4.0, 0.3)
     assert not out.stopped and out.state[T_INDEX] == pytest.approx(0.3)
+
+
+# --- TrackingSession.set_params: live parameter changes reach the next tick -----------------
+
+def test_set_params_changes_the_limits_of_the_next_tick():
+    s = TrackingSession(ControllerParams(), odom_timeout=0.1)
+    s.on_odometry(30.0, 40.0, 0.0, 0.0, 0.0, 0.0, 'odom')
+    assert s.tick(0.0, 0.0).v < 1.0  # at t = 0 s(0) = 0: a modest speed command
+    fast = InputLimits(v_min=1.0, v_max=2.0)
+    s.set_params(ControllerParams(dlsmc=replace(DlsmcConfig(), limits=fast)))
+    assert s.params.dlsmc.limits == fast
+    s.on_odometry(30.0, 40.0, 0.0, 0.001, 0.001, 0.001, 'odom')
+    assert s.tick(0.001, 0.001).v == 1.0  # now held up at the new v_min
+
+
+# --- TrackingSession guards: the edges of the odometry checks --------------------------------
+
+@pytest.mark.parametrize('bad', [0, -1, True, 1.5, '3'])
+def test_confirm_messages_must_be_an_integer_of_at_least_one(bad):
+    with pytest.raises(ValueError, match='confirm_messages'):
+        session(confirm_messages=bad)
+
+
+def test_one_confirming_message_takes_a_new_time_base_at_once():
+    s = session(confirm_messages=1)
+    feed(s, 1.0, 4.0, 0.0)
+    accepted, out = feed(s, 1.0, 4.0, 5.0, wall=0.001)  # a gap forward: taken at once
+    assert accepted and not out.stopped
+
+
+def test_restart_threshold_defaults_to_one_second_and_bounds_out_of_order():
+    s = session()
+    for stamp in (2.0, 2.5, 3.0):
+        feed(s, 1.0, 4.0, stamp)
+    # 0.875 s back: out of order (ignored); 1 s back (the threshold itself) and beyond: off
+    # the time base, so the message is taken and stops the robot.
+    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.125, 'odom') is False
+    assert s.on_odometry(1.0, 4.0, 0.0, 3.001, 3.001, 2.0, 'odom') is True
+    assert s.tick(3.001, 3.001).stopped
+    s = session()
+    feed(s, 1.0, 4.0, 2.0)
+    assert s.on_odometry(1.0, 4.0, 0.0, 2.001, 2.001, 0.5, 'odom') is True  # 1.5 s back
+
+
+def test_a_repeated_stamp_is_not_out_of_order():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    feed(s, 1.0, 4.0, 0.001)
+    accepted, out = feed(s, 1.0, 4.0, 0.001, wall=0.002)
+    assert accepted and not out.stopped
+
+
+def test_jump_limit_is_inclusive_and_counts_both_axes():
+    s = session(max_jump=1.0)
+    feed(s, 1.0, 4.0, 0.0)
+    assert not feed(s, 1.0, 5.0, 0.001)[1].stopped  # exactly 1 m along y: accepted
+    out = feed(s, 1.0, 6.5, 0.002)[1]  # 1.5 m along y only
+    assert out.stopped and 'jumped 1.50 m' in out.report
+
+
+def test_stale_odometry_is_reported_once_while_it_lasts():
+    s = session()
+    feed(s, 1.0, 4.0, 0.0)
+    outs = [s.tick(0.2 + 0.01 * k, 0.2 + 0.01 * k) for k in range(3)]
+    assert all(o.stopped for o in outs)
+    assert outs[0].report is not None and outs[1].report is None and outs[2].report is None
+    assert s.tick(0.3, 0.3).state[STATE_FIELDS.index('stopped')] == 1.0
+
+
+def test_the_session_integrates_over_the_measured_step():
+    # Ticks 2 ms apart: the controller must see dt = 2 ms, as a controller stepped by hand.
+    params = ControllerParams()
+    s = TrackingSession(params, odom_timeout=0.1)
+    ref = DlsmcController(params.dlsmc)
+    traj = params.trajectory
+    for k, t in enumerate((0.0, 0.002, 0.004)):
+        s.on_odometry(1.0, 4.0, 0.0, t, t, t, 'odom')
+        out = s.tick(t, t)
+        x_d, y_d, xdot_d, ydot_d = (float(v) for v in traj.sample(t))
+        xddot_d, yddot_d = (float(v) for v in traj.acceleration(t))
+        v, omega = ref.step(1.0, 4.0, 0.0, x_d, y_d, xdot_d, ydot_d, None if k == 0 else 0.002,
+                            xddot_d, yddot_d)
+        assert (out.v, out.omega) == (v, omega)
+    # A tick 0.5 s after the previous (> 100 periods) falls back to the nominal period.
+    s.on_odometry(1.0, 4.0, 0.0, 0.504, 0.504, 0.504, 'odom')
+    out = s.tick(0.504, 0.504)
+    x_d, y_d, xdot_d, ydot_d = (float(v) for v in traj.sample(0.504))
+    xddot_d, yddot_d = (float(v) for v in traj.acceleration(0.504))
+    assert (out.v, out.omega) == ref.step(1.0, 4.0, 0.0, x_d, y_d, xdot_d, ydot_d, None,
+                                          xddot_d, yddot_d)

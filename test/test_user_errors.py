@@ -15,6 +15,8 @@ import sys
 from nfmr_dlsmc.cli.common import ros_log_folder
 import pytest
 
+pytestmark = [pytest.mark.ros, pytest.mark.commands]
+
 BIN = Path(sys.executable).parent
 #: What pybullet itself prints when it is imported; not ours.
 PYBULLET_LINES = ('pybullet build time', 'argv[0]=')
