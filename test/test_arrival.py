@@ -180,6 +180,7 @@ def nfmr_eval(*args):
                           cwd=ROOT, timeout=300)
 
 
+@pytest.mark.commands
 def test_nfmr_eval_follows_a_path_file_and_reports_the_arrival():
     proc = nfmr_eval('--params', str(ROBOT), '--path', 'config/paths/warehouse_loop.csv',
                      '--hold-from', '5', '--json')
@@ -195,6 +196,7 @@ def test_nfmr_eval_follows_a_path_file_and_reports_the_arrival():
     assert result['hold_distance_p99'] <= 0.003 and result['hold_omega_saturated'] == 0.0
 
 
+@pytest.mark.commands
 def test_nfmr_eval_refuses_a_path_and_a_trajectory_and_a_bad_path_file(tmp_path):
     proc = nfmr_eval('--path', 'config/paths/warehouse_loop.csv', '--trajectory', 'sine')
     assert proc.returncode == 2 and 'not allowed with argument' in proc.stderr

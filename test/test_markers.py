@@ -26,11 +26,6 @@ HERE = Path(__file__).parent
 SPAWNS = {'run', 'Popen', 'call', 'check_call', 'check_output'}
 COMMAND = re.compile(r'nfmr-[a-z]+(-[a-z]+)*')
 STARTS_RCLPY = re.compile(r'\brclpy\.(init|create_node)\b')
-#: Test modules whose tests do what a marker says and do not carry it yet; each entry is an
-#: expected failure, and the check fails once the module is marked (remove the entry then).
-NOT_MARKED_YET = {
-    'test_arrival.py': 'its two nfmr-eval tests carry no commands marker',
-}
 
 
 def _marks(decorators):
@@ -210,10 +205,7 @@ class Module:
         return lines
 
 
-@pytest.mark.parametrize('path', [
-    pytest.param(p, id=p.name, marks=pytest.mark.xfail(
-        strict=True, reason=NOT_MARKED_YET[p.name])) if p.name in NOT_MARKED_YET else
-    pytest.param(p, id=p.name) for p in sorted(HERE.glob('test_*.py'))])
+@pytest.mark.parametrize('path', sorted(HERE.glob('test_*.py')), ids=lambda p: p.name)
 def test_every_test_that_spins_ros_steps_pybullet_or_runs_commands_is_marked(path):
     assert Module.named(path.stem).missing() == []
 
