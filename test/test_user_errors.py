@@ -128,6 +128,7 @@ def test_a_user_error_is_one_line_and_exit_2(tmp_path, name, arguments, needle):
 
 @pytest.mark.parametrize('command', [['nfmr-run', '--duration', '1', '--no-compare'],
                                      ['nfmr-publish-path', 'paths/warehouse_loop.csv'],
+                                     ['nfmr-bench', '--nodes'],
                                      ['nfmr-controller']])
 def test_a_home_where_ros_cannot_log_is_one_line_and_exit_2(tmp_path, request, command):
     # rcl creates ~/.ros/log at init; under a HOME that is a file it cannot, and rclpy

@@ -21,7 +21,13 @@ from nfmr_dlsmc.analysis.benchmarks import (
     pybullet_closed_loop_rtf,
     pybullet_world_rtf,
 )
-from nfmr_dlsmc.cli.common import check_writable, json_ready, OneLineParser, run_command
+from nfmr_dlsmc.cli.common import (
+    check_ros_log_folder,
+    check_writable,
+    json_ready,
+    OneLineParser,
+    run_command,
+)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -50,6 +56,8 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     if args.json:
         check_writable(Path(args.json), '--json')
+    if args.nodes:
+        check_ros_log_folder()  # before the benchmarks, not after them
     print('kinematic closed loop (paper Case 1, 100 000 steps) ...', flush=True)
     figures = {'kinematic_scalar': kinematic_steps_per_second(args.repeat)}
     print('compute per tick of every controller ...', flush=True)
