@@ -483,6 +483,24 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
     assert node.session.params.trajectory_name == 'path'
 
 
+def test_a_diagnostics_call_right_after_the_last_reports_no_missing_ticks(setup):
+    # A busy executor can run two due timer calls back to back; the second has no window
+    # behind it, and warned "no control ticks in the last second" after a second of ticks.
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+
+    node, peer = setup()
+    node._diag_timer.cancel()  # the two calls below are the only ones
+    diagnostics = []
+    peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
+    drive(peer, 50)
+    node._publish_diagnostics()
+    node._publish_diagnostics()
+    wait_for(lambda: diagnostics, what='the first report')
+    time.sleep(0.3)  # a window in which a second report must not come
+    statuses = [s for d in diagnostics for s in d.status]
+    assert [s.level for s in statuses] == [DiagnosticStatus.OK], [s.message for s in statuses]
+
+
 def test_arrival_is_logged_once_and_named_on_diagnostics(setup, log):
     from diagnostic_msgs.msg import DiagnosticArray
 
