@@ -354,16 +354,17 @@ def test_lockstep_reruns_are_bit_identical():
 
 
 def test_realtime_mode_never_runs_ahead_of_the_wall_clock(ros_context):
+    # Whether it keeps up is a figure of the machine (nfmr-bench --nodes: realtime_sim_rtf);
+    # here it must step, and never ahead of the wall clock.
     sim, driver, executor = start(ros_context, mode='realtime')
     try:
         begin = time.monotonic()
         driver.wait_odom(1)
-        time.sleep(1.0)
+        first = _seconds(driver.odom[0].header.stamp)
+        time.sleep(1.0)  # a window in which it may not run ahead
         elapsed = time.monotonic() - begin
-        stamp = driver.odom[-1].header.stamp
-        sim_time = stamp.sec + stamp.nanosec * 1e-9
-        assert sim_time <= elapsed + 0.002
-        assert sim_time > 0.5 * elapsed  # and it does keep up
+        sim_time = _seconds(driver.odom[-1].header.stamp)
+        assert first < sim_time <= elapsed + 0.002
     finally:
         stop(sim, driver, executor)
 
