@@ -246,10 +246,13 @@ class ChassisWorld:
         if steer.shape != (4,) or wheel_speed.shape != (4,):
             raise ValueError(f'expected 4 steer angles and 4 wheel speeds, got '
                              f'{steer.size} and {wheel_speed.size}')
-        if not (np.all(np.isfinite(steer)) and np.all(np.isfinite(wheel_speed))):
+        # Once per lockstep step: the checks and the clip on floats (numpy's took 10 us).
+        angles = steer.tolist()
+        if not all(map(math.isfinite, angles + wheel_speed.tolist())):
             raise ValueError('steer angles and wheel speeds must be finite')
         limit = self.config.chassis.steer_limit
-        self._steer_target = np.clip(steer, -limit, limit)
+        self._steer_target = np.array(
+            [-limit if a < -limit else (limit if a > limit else a) for a in angles])
         self._wheel_target = wheel_speed
 
     def brake(self) -> None:

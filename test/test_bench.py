@@ -6,7 +6,7 @@ from pathlib import Path
 import subprocess
 import sys
 
-from nfmr_dlsmc.analysis.benchmarks import kinematic_steps_per_second
+from nfmr_dlsmc.analysis.benchmarks import kinematic_steps_per_second, pybullet_rtf
 from nfmr_dlsmc.analysis.plain_loop import plain_dlsmc_loop
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.trajectories import make_trajectory
@@ -48,6 +48,14 @@ def test_the_kinematic_figure_comes_with_its_ratio_to_the_plain_loop():
         figure['steps_per_s'] / figure['plain_loop_steps_per_s'])
 
 
+def test_the_pybullet_closed_loop_comes_with_its_ratio_to_the_bare_world():
+    world, loop = pybullet_rtf(0.2, 2)
+    assert world['sim_s'] == loop['sim_s'] == 0.2
+    ratio = loop['ratio_to_world']
+    assert math.isfinite(ratio) and ratio > 0.0
+    assert ratio == pytest.approx(loop['real_time_factor'] / world['real_time_factor'])
+
+
 @pytest.mark.slow
 @pytest.mark.ros
 @pytest.mark.commands
@@ -62,6 +70,8 @@ def test_bench_with_nodes_reports_every_figure(tmp_path):
     kinematic = figures['kinematic_scalar']
     assert kinematic['ratio_to_plain_loop'] > 0.0 and kinematic['plain_loop_steps_per_s'] > 0.0
     assert 'closed loop / plain loop' in proc.stdout
+    assert figures['pybullet_closed_loop']['ratio_to_world'] > 0.0
+    assert 'closed loop / bare world' in proc.stdout
     nodes = figures['nodes']
     for section in ('controller_loop', 'plain_rclpy_timer', 'odom_to_command_latency',
                     'rss_mb', 'bag_writer'):

@@ -89,6 +89,19 @@ def test_stationary_wheels_hold_their_angle():
     np.testing.assert_allclose(cmd.wheel_speed, 0.0)
 
 
+@pytest.mark.parametrize('mode', [DOUBLE, FRONT, SteerMode(-0.5, 1.5)])
+@pytest.mark.parametrize('geometry', [GEOM, RobotGeometry(steer_limit=0.3)])
+def test_a_tick_maps_as_the_series_of_the_logs_bit_for_bit(mode, geometry):
+    # A run's steer angles come from wheel_commands at each tick, the kinematic model's and
+    # the logs' from steer_angle_series: the same numbers, not merely close ones.
+    rng = np.random.default_rng(0)
+    v, omega = rng.uniform(-2.0, 2.0, (2, 400))
+    series = steer_angle_series(v, omega, geometry, mode)
+    ticks = [wheel_commands(a, b, geometry, mode).steer
+             for a, b in zip(v.tolist(), omega.tolist())]
+    assert np.array_equal(series, ticks)
+
+
 @pytest.mark.parametrize('mode', [DOUBLE, FRONT, SteerMode(0.3, 0.7)])
 def test_eq2_agrees_with_rigid_body_geometry(mode):
     v, omega = 0.9, 0.7

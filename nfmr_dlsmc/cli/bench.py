@@ -18,8 +18,7 @@ from nfmr_dlsmc.analysis.benchmarks import (
     benchmark_table,
     controller_tick_us,
     kinematic_steps_per_second,
-    pybullet_closed_loop_rtf,
-    pybullet_world_rtf,
+    pybullet_rtf,
 )
 from nfmr_dlsmc.cli.common import (
     check_ros_log_folder,
@@ -34,7 +33,9 @@ def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog='nfmr-bench',
                            description='Benchmarks that print numbers (make bench); no '
                                        'pass/fail thresholds here.')
-    parser.add_argument('--repeat', type=int, default=5)
+    parser.add_argument('--repeat', type=int, default=5,
+                        help='best of how many runs of the kinematic loop and of each pybullet '
+                             'figure (default 5)')
     parser.add_argument('--json', metavar='FILE')
     parser.add_argument('--sim-seconds', type=float, default=20.0,
                         help='simulated time of the pybullet figures [s]')
@@ -62,10 +63,10 @@ def _run(args) -> int:
     figures = {'kinematic_scalar': kinematic_steps_per_second(args.repeat)}
     print('compute per tick of every controller ...', flush=True)
     figures['controller_tick'] = controller_tick_us()
-    print(f'pybullet chassis world, {args.sim_seconds:g} s ...', flush=True)
-    figures['sim_world'] = pybullet_world_rtf(args.sim_seconds)
-    print('pybullet closed loop (robot profile, lockstep, one process) ...', flush=True)
-    figures['pybullet_closed_loop'] = pybullet_closed_loop_rtf(args.sim_seconds)
+    print(f'pybullet chassis world and the closed loop on it (robot profile, lockstep, one '
+          f'process), {args.sim_seconds:g} s each, best of {args.repeat} ...', flush=True)
+    figures['sim_world'], figures['pybullet_closed_loop'] = pybullet_rtf(args.sim_seconds,
+                                                                         args.repeat)
     jobs = os.cpu_count() or 1
     print(f'batch kinematic closed loop, 500 robots in one process and 4000 on {jobs} ...',
           flush=True)

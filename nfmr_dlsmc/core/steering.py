@@ -209,21 +209,31 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
         Steer angles [rad] kept by wheels that do not move (default 0).
 
     """
-    pos = geometry.wheel_positions
-    wvx = vx - omega * pos[:, 1]
-    wvy = vy + omega * pos[:, 0]
-    speed = np.hypot(wvx, wvy) / geometry.wheel_radius
-    steer = np.arctan2(wvy, wvx)
-    reverse = np.abs(steer) > 0.5 * math.pi
-    steer = np.where(reverse, steer - np.copysign(math.pi, steer), steer)
-    speed = np.where(reverse, -speed, speed)
-    still = np.hypot(wvx, wvy) < 1e-12
-    if np.any(still):
-        held = np.zeros(4) if hold_steer is None else np.asarray(hold_steer, dtype=float)
-        steer = np.where(still, held, steer)
-    limited = bool(np.any(np.abs(steer) > geometry.steer_limit + 1e-12))
-    steer = np.clip(steer, -geometry.steer_limit, geometry.steer_limit)
-    return WheelCommands(steer=steer, wheel_speed=speed, limited=limited)
+    # Once per control tick, for four wheels: Python floats (a dozen numpy calls on arrays of
+    # four took 20 us a mapping, this 5 us), but for each wheel's |velocity| and direction:
+    # numpy's hypot and arctan2, those of steer_angle_series (math's differ from them in the
+    # last bit where numpy runs SIMD versions, and every run's figures would move with them).
+    # The wheels at (+-a, +-b), FL FR RL RR, as in RobotGeometry.wheel_positions.
+    a, b = 0.5 * geometry.wheelbase, 0.5 * geometry.track
+    wvx = np.array((vx - omega * b, vx - omega * -b, vx - omega * b, vx - omega * -b))
+    wvy = np.array((vy + omega * a, vy + omega * a, vy + omega * -a, vy + omega * -a))
+    norm = np.hypot(wvx, wvy).tolist()
+    direction = np.arctan2(wvy, wvx).tolist()
+    radius, limit = geometry.wheel_radius, geometry.steer_limit
+    steer, speed = [], []
+    limited = False
+    for i in range(4):
+        angle, rate = direction[i], norm[i] / radius
+        if abs(angle) > 0.5 * math.pi:
+            angle -= math.copysign(math.pi, angle)
+            rate = -rate
+        if norm[i] < 1e-12:
+            angle = 0.0 if hold_steer is None else float(hold_steer[i])
+        if abs(angle) > limit + 1e-12:
+            limited = True
+        steer.append(-limit if angle < -limit else (limit if angle > limit else angle))
+        speed.append(rate)
+    return WheelCommands(steer=np.array(steer), wheel_speed=np.array(speed), limited=limited)
 
 
 def wheel_commands(v: float, omega: float, geometry: RobotGeometry, mode: SteerMode,
