@@ -48,6 +48,7 @@ def test_the_kinematic_figure_comes_with_its_ratio_to_the_plain_loop():
         figure['steps_per_s'] / figure['plain_loop_steps_per_s'])
 
 
+@pytest.mark.sim
 def test_the_pybullet_closed_loop_comes_with_its_ratio_to_the_bare_world():
     world, loop = pybullet_rtf(0.2, 2)
     assert world['sim_s'] == loop['sim_s'] == 0.2

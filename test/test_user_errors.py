@@ -43,7 +43,9 @@ CASES = [
      lambda d: ['--params', str(_write(d / 'p.yaml', 'controller:\n  ros__parameters:\n'
                                                      '    inner: {p1: 32}\n'))],
      'inner.p1 = 32: must be a positive odd integer'),
-    ('nfmr-bench', lambda d: ['--repeat', 'often'], 'argument --repeat: invalid int value'),
+    ('nfmr-bench', lambda d: ['--repeat', 'often'], 'argument --repeat: expected an integer'),
+    ('nfmr-bench', lambda d: ['--repeat', '0'], 'argument --repeat'),
+    ('nfmr-bench', lambda d: ['--sim-seconds', '0'], 'argument --sim-seconds'),
     ('nfmr-tune',
      lambda d: ['--params', str(_write(d / 'p.yaml', 'controller: [\n')),
                 '--out', str(d / 'tuned.yaml')],

@@ -25,6 +25,8 @@ from nfmr_dlsmc.cli.common import (
     check_writable,
     json_ready,
     OneLineParser,
+    positive_integer,
+    positive_number,
     run_command,
 )
 
@@ -33,17 +35,17 @@ def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog='nfmr-bench',
                            description='Benchmarks that print numbers (make bench); no '
                                        'pass/fail thresholds here.')
-    parser.add_argument('--repeat', type=int, default=5,
+    parser.add_argument('--repeat', type=positive_integer, default=5,
                         help='best of how many runs of the kinematic loop and of each pybullet '
                              'figure (default 5)')
     parser.add_argument('--json', metavar='FILE')
-    parser.add_argument('--sim-seconds', type=float, default=20.0,
+    parser.add_argument('--sim-seconds', type=positive_number, default=20.0,
                         help='simulated time of the pybullet figures [s]')
     parser.add_argument('--nodes', action='store_true',
                         help='also measure the running nodes (takes --seconds and more)')
-    parser.add_argument('--seconds', type=float, default=60.0,
+    parser.add_argument('--seconds', type=positive_number, default=60.0,
                         help='how long the node loops run with --nodes [s] (default 60)')
-    parser.add_argument('--run-seconds', type=float, default=20.0,
+    parser.add_argument('--run-seconds', type=positive_number, default=20.0,
                         help='simulated time of each whole nfmr-run with --nodes [s] '
                              '(default 20)')
     return parser
