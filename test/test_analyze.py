@@ -156,13 +156,19 @@ def test_bag_without_the_state_topic_names_what_is_missing(case1, tmp_path):
 
 
 def _state_bag(directory, rows_and_strays):
-    """Write /controller_state messages: rows (with the layout) and stray value lists."""
+    """
+    Write /controller_state messages: rows (with the layout), stray value lists and raw CDR
+    payloads (bytes).
+    """
     dim = [MultiArrayDimension(label=','.join(STATE_FIELDS), size=len(STATE_FIELDS),
                                stride=len(STATE_FIELDS))]
     with BagWriter(directory) as writer:
         writer.add_topic('/controller_state', 'std_msgs/msg/Float64MultiArray',
                          [QosProfile(depth=1000)])
         for k, values in enumerate(rows_and_strays):
+            if isinstance(values, bytes):
+                writer.write('/controller_state', 1000 + k * 1_000_000, values)
+                continue
             msg = Float64MultiArray(data=list(values))
             if len(values) == len(STATE_FIELDS):
                 msg.layout.dim = dim
@@ -189,6 +195,19 @@ def test_stray_messages_on_the_state_topic_are_skipped_and_counted(case1, tmp_pa
         tracks.append(state_track(contents, series))
     (t_clean, ref_clean, _), (t_stray, ref_stray, _) = tracks
     assert np.array_equal(t_clean, t_stray) and np.array_equal(ref_clean, ref_stray)
+
+
+def test_undecodable_state_messages_are_skipped_and_counted(case1, tmp_path):
+    rows = list(state_rows(case1)[::10])
+    # A CDR header, then a sequence claiming 2**31 - 1 doubles: no Float64MultiArray.
+    corrupt = b'\x00\x01\x00\x00' + b'\x00' * 8 + b'\xff\xff\xff\x7f'
+    _state_bag(tmp_path / 'clean', rows)
+    _state_bag(tmp_path / 'corrupt', [corrupt] + rows[:100] + [corrupt] + rows[100:])
+    clean, corrupted = (analyze(tmp_path / name, '--json') for name in ('clean', 'corrupt'))
+    assert corrupted.returncode == 0, corrupted.stderr
+    assert '2 /controller_state messages of another shape or that do not decode' \
+        in corrupted.stderr
+    assert last_json(corrupted)['bags'][0]['metrics'] == last_json(clean)['bags'][0]['metrics']
 
 
 def test_a_run_whose_tracking_started_over_is_measured_on_its_last_segment(case1, tmp_path):

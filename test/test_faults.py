@@ -186,8 +186,9 @@ def test_a_command_flood_costs_the_realtime_sim_little_and_leaves_no_backlog():
 
     def sim_cost(seconds):
         """
-        Over the next ``seconds`` [s] of wall time: the sim's CPU seconds per sim second,
-        and the command pairs sent per sim second.
+        Measure the sim over the next ``seconds`` [s] of wall time.
+
+        Returns its CPU seconds per sim second and the command pairs sent per sim second.
         """
         cpu, start, sent_before = _cpu_seconds(sim_proc.pid), clocks[-1][1], sent[0]
         time.sleep(seconds)

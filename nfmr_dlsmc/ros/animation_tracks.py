@@ -13,9 +13,8 @@ from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.steering import RobotGeometry, WHEEL_NAMES
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.ros.run_series import GROUND_TRUTH_TOPIC, JOINT_TOPIC, STATE_TOPIC
+from nfmr_dlsmc.ros.run_series import decoded, GROUND_TRUTH_TOPIC, JOINT_TOPIC, STATE_TOPIC
 import numpy as np
-from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import MarkerArray
 
@@ -71,13 +70,15 @@ def pose_track(contents: BagContents) -> tuple[str, np.ndarray, np.ndarray, int]
     if messages[0].type_name != 'nav_msgs/msg/Odometry':
         raise BagError(f'{contents.path}: {topic} has type {messages[0].type_name}, expected '
                        'nav_msgs/msg/Odometry')
-    stamps, poses = [], []
-    for message in messages:
-        msg = deserialize_message(message.data, Odometry)
+    stamps, poses, log_times = [], [], []
+    for message, msg in decoded(messages, Odometry):
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        log_times.append(message.log_time)
         stamps.append(_stamp_ns(msg))
         poses.append((p.x, p.y, yaw_from_quaternion(q.x, q.y, q.z, q.w)))
-    delay = _recorder_delay([m.log_time for m in messages], stamps)
+    if not stamps:
+        raise BagError(f'{contents.path}: no {topic} message decodes as nav_msgs/msg/Odometry')
+    delay = _recorder_delay(log_times, stamps)
     stamps, poses = _by_time(stamps, poses)
     if not stamps.size:
         raise BagError(f'{contents.path}: no {topic} message has a finite pose')
@@ -103,8 +104,7 @@ def steer_angle_track(contents: BagContents) -> tuple[np.ndarray, np.ndarray]:
         raise BagError(f'{contents.path}: no {JOINT_TOPIC} messages, which the animation '
                        f'needs for the measured steer angles {_topics_note(contents)}')
     stamps, angles = [], []
-    for message in messages:
-        msg = deserialize_message(message.data, JointState)
+    for _, msg in decoded(messages, JointState):
         index = {name: i for i, name in enumerate(msg.name)}
         if len(msg.position) != len(msg.name) or not all(j in index for j in STEER_JOINTS):
             continue
@@ -133,8 +133,8 @@ def recorded_robot(contents: BagContents) -> tuple[RobotGeometry, Footprint, flo
         The markers draw an impossible robot (e.g. all wheels at one point).
 
     """
-    for message in contents.of(MARKER_TOPIC):
-        markers = deserialize_message(message.data, MarkerArray).markers
+    for _, message in decoded(contents.of(MARKER_TOPIC), MarkerArray):
+        markers = message.markers
         wheels = {m.id: m for m in markers if m.ns == 'wheels'}
         points = [m.pose.position for m in markers if m.ns == 'point_p']
         if sorted(wheels) != [0, 1, 2, 3] or not points:

@@ -27,13 +27,31 @@ NEEDED_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_d', 'theta_r', 'th
                  'omega', 'stopped')
 
 
+def decoded(messages, msg_type) -> list:
+    """
+    Return (bag message, decoded message) pairs of recorded messages of one type.
+
+    A payload that does not decode as ``msg_type`` (a foreign publisher's, a corrupted
+    one) is left out: a bag's users read what can be read, and the callers count what they
+    miss where it changes a figure.
+    """
+    pairs = []
+    for message in messages:
+        try:
+            pairs.append((message, deserialize_message(message.data, msg_type)))
+        except RuntimeError:  # rclpy's RMWError: the CDR bytes are not a msg_type
+            continue
+    return pairs
+
+
 def state_series(contents: BagContents) -> tuple[dict, int]:
     """
     Return the ``controller_state`` messages of a read bag as arrays keyed by field name.
 
     The field names come from the layout label (``t,x,y,...``) of the first message that
     has one, else :data:`~nfmr_dlsmc.runtime.tracking_session.STATE_FIELDS`. Messages of
-    another length (a foreign publisher, a malformed message) are skipped.
+    another length (a foreign publisher) or that do not decode (a malformed message) are
+    skipped.
 
     Returns
     -------
@@ -58,15 +76,14 @@ def state_series(contents: BagContents) -> tuple[dict, int]:
     if type_name != 'std_msgs/msg/Float64MultiArray':
         raise BagError(f'{contents.path}: {STATE_TOPIC} has type {type_name}, expected '
                        'std_msgs/msg/Float64MultiArray')
-    decoded = [(m.log_time, deserialize_message(m.data, Float64MultiArray))
-               for m in messages if len(m.data)]
-    labelled = next((msg for _, msg in decoded if msg.layout.dim and msg.layout.dim[0].label),
+    states = [(m.log_time, msg) for m, msg in decoded(messages, Float64MultiArray)]
+    labelled = next((msg for _, msg in states if msg.layout.dim and msg.layout.dim[0].label),
                     None)
     names = labelled.layout.dim[0].label.split(',') if labelled else list(STATE_FIELDS)
     missing = [n for n in NEEDED_FIELDS if n not in names]
     if missing:
         raise BagError(f"{contents.path}: {STATE_TOPIC} lacks the fields {', '.join(missing)}")
-    kept = [(log_time, msg.data) for log_time, msg in decoded if len(msg.data) == len(names)]
+    kept = [(log_time, msg.data) for log_time, msg in states if len(msg.data) == len(names)]
     if not kept:
         raise BagError(f'{contents.path}: no {STATE_TOPIC} message has the {len(names)} '
                        'values of its layout')
@@ -80,8 +97,8 @@ def run_notes(skipped: int, segments: int) -> list[str]:
     """Return what a reader of a run's figures must know of its state messages."""
     notes = []
     if skipped:
-        notes.append(f'{skipped} {STATE_TOPIC} messages of another shape (not this '
-                     "controller's) skipped")
+        notes.append(f'{skipped} {STATE_TOPIC} messages of another shape or that do not '
+                     "decode (not this controller's) skipped")
     if segments > 1:
         notes.append(f'tracking started over {segments - 1} times (trajectory time went '
                      'back): the figures are of the last segment')
@@ -97,8 +114,8 @@ def loop_windows(contents: BagContents) -> list[dict]:
     lifecycle state, are left out.
     """
     windows = []
-    for message in contents.of(DIAGNOSTICS_TOPIC):
-        for status in deserialize_message(message.data, DiagnosticArray).status:
+    for _, message in decoded(contents.of(DIAGNOSTICS_TOPIC), DiagnosticArray):
+        for status in message.status:
             values = {}
             for kv in status.values:
                 try:
@@ -120,7 +137,9 @@ def ground_truth_track(contents: BagContents) -> tuple[np.ndarray, np.ndarray] |
     truth = contents.of(GROUND_TRUTH_TOPIC)
     if not truth:
         return None
-    odom = [deserialize_message(m.data, Odometry) for m in truth]
+    odom = [msg for _, msg in decoded(truth, Odometry)]
+    if not odom:
+        return None
     stamps = np.array([o.header.stamp.sec + o.header.stamp.nanosec * 1e-9 for o in odom])
     order = np.argsort(stamps, kind='stable')
     stamps = stamps[order]
@@ -139,8 +158,7 @@ def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | 
     the bag has none.
     """
     stamps, rates = [], []
-    for message in contents.of(JOINT_TOPIC):
-        msg = deserialize_message(message.data, JointState)
+    for _, msg in decoded(contents.of(JOINT_TOPIC), JointState):
         steer = [i for i, name in enumerate(msg.name) if name.endswith('_steer')]
         if len(steer) != 4 or len(msg.velocity) != len(msg.name):
             continue
@@ -162,7 +180,8 @@ def path_goal(contents: BagContents, series: dict) -> tuple | None:
     paths = contents.of(REFERENCE_PATH_TOPIC)
     if arrival is None or not len(arrival) or arrival[-1] == 0.0 or not paths:
         return None
-    poses = deserialize_message(paths[-1].data, PathMessage).poses
+    plans = decoded(paths[-1:], PathMessage)
+    poses = plans[0][1].poses if plans else None
     if not poses:
         return None
     pose = poses[-1].pose
