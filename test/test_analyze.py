@@ -157,8 +157,9 @@ def test_bag_without_the_state_topic_names_what_is_missing(case1, tmp_path):
 
 def _state_bag(directory, rows_and_strays):
     """
-    Write /controller_state messages: rows (with the layout), stray value lists and raw CDR
-    payloads (bytes).
+    Write /controller_state messages.
+
+    Rows (with the layout), stray value lists and raw CDR payloads (bytes).
     """
     dim = [MultiArrayDimension(label=','.join(STATE_FIELDS), size=len(STATE_FIELDS),
                                stride=len(STATE_FIELDS))]
