@@ -8,7 +8,7 @@ own (so that a run of another session never takes it), and the run's discovery p
 import os
 import signal
 
-from nfmr_dlsmc.runtime.ros_domain import DISCOVERY_PROFILE, reserve_domain
+from nfmr_dlsmc.runtime.ros_domain import FASTDDS_PROFILE, reserve_domain
 from nfmr_dlsmc.runtime.share import shipped_config
 import pytest
 from ros_helpers import release_participants
@@ -24,7 +24,7 @@ if 'ROS_DOMAIN_ID' not in os.environ:
     os.environ['ROS_DOMAIN_ID'] = str(SESSION_DOMAIN.domain)
 # Fast DDS announcing as often as in a run: nodes the tests start are found in tenths of a
 # second, not at the 3 s announcement of the defaults (doc/design.md, D13).
-os.environ.setdefault(DISCOVERY_PROFILE[0], str(shipped_config(DISCOVERY_PROFILE[1])))
+os.environ.setdefault(FASTDDS_PROFILE[0], str(shipped_config(FASTDDS_PROFILE[1])))
 
 
 @pytest.fixture(autouse=True)

@@ -16,13 +16,14 @@ import socket
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.share import shipped_config
 
-__all__ = ['DISCOVERY_PROFILE', 'DOMAINS', 'DomainReservation', 'discovery_port',
+__all__ = ['DOMAINS', 'DomainReservation', 'FASTDDS_PROFILE', 'discovery_port',
            'reserve_domain']
 
-#: The Fast DDS participant profile of a run's processes (announcing every 0.25 s: a node
-#: started beside running ones is found within tenths of a second, not 3 s) and the
+#: The Fast DDS profile of a run's processes (participants announcing every 0.25 s: a node
+#: started beside running ones is found within tenths of a second, not 3 s; writers with a
+#: NACK-suppression window: a publish no longer wakes Fast DDS's event thread) and the
 #: variable that names it; a profile the user names in that variable is kept.
-DISCOVERY_PROFILE = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'fastdds_discovery.xml')
+FASTDDS_PROFILE = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'fastdds_profile.xml')
 
 #: Domains a run may take: 1-101 (0 is everyone's default; above 101 the ports of many
 #: participants would reach the ephemeral range on Linux, as ROS 2's documentation warns).
@@ -45,10 +46,10 @@ class DomainReservation:
         """
         Return the variables that put a process on this domain, discovering this host only.
 
-        With the run's Fast DDS profile (:data:`DISCOVERY_PROFILE`) unless the environment
+        With the run's Fast DDS profile (:data:`FASTDDS_PROFILE`) unless the environment
         names one already.
         """
-        variable, profile = DISCOVERY_PROFILE
+        variable, profile = FASTDDS_PROFILE
         return {'ROS_DOMAIN_ID': str(self.domain),
                 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST',
                 variable: os.environ.get(variable) or str(shipped_config(profile))}
