@@ -165,8 +165,10 @@ class ArrivingController:
         dx, dy = x - gx, y - gy
         distance = math.hypot(dx, dy)
         yaw_error = math.remainder(theta - gyaw, 2.0 * math.pi)
+        speed_d = math.hypot(xdot_d, ydot_d)
         if not self._left_goal:
-            return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d)
+            return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d,
+                                 speed_d)
         if (reference_distance <= FINAL_SHARE * config.goal_tolerance
                 and distance <= config.goal_tolerance and abs(yaw_error) <= config.yaw_tolerance):
             return self._end(_ARRIVED, distance, yaw_error)
@@ -176,20 +178,23 @@ class ArrivingController:
             self._at_rest += self.controller.period if dt is None else dt
             if self._at_rest > config.goal_timeout:
                 return self._end(_TIMED_OUT, distance, yaw_error)
-        speed_d = math.hypot(xdot_d, ydot_d)
         if 0.0 < speed_d < self.controller.limits.v_min:
             heading = math.atan2(ydot_d, xdot_d)
             ahead = (x - x_d) * math.cos(heading) + (y - y_d) * math.sin(heading)
             if ahead > WAIT_SHARE * config.goal_tolerance:
                 return 0.0, 0.0  # wait for the slow reference rather than turn round to it
-        return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d)
+        return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d,
+                             speed_d)
 
-    def _steered(self, x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d):
-        """Return the wrapped law's (v, omega), its curvature bounded when slow (rule 6)."""
+    def _steered(self, x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d, speed_d):
+        """
+        Return the wrapped law's (v, omega), its curvature bounded when slow (rule 6).
+
+        ``speed_d`` is the reference's speed |(xdot_d, ydot_d)| [m/s].
+        """
         v, omega = self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
                                         yddot_d)
         config = self.config
-        speed_d = math.hypot(xdot_d, ydot_d)
         v_min = self.controller.limits.v_min
         if (config.slow_curvature_band > 0.0 and speed_d < v_min
                 and math.hypot(x - x_d, y - y_d) <= config.goal_tolerance):
