@@ -9,6 +9,7 @@ from pathlib import Path
 import sys
 import tempfile
 
+from nfmr_dlsmc.core.sliding_functions import FLOATS
 from nfmr_dlsmc.core.steering import WHEEL_NAMES
 from nfmr_sim.urdf import chassis_urdf
 from nfmr_sim.world_config import WorldConfig
@@ -251,8 +252,7 @@ class ChassisWorld:
         if not all(map(math.isfinite, angles + wheel_speed.tolist())):
             raise ValueError('steer angles and wheel speeds must be finite')
         limit = self.config.chassis.steer_limit
-        self._steer_target = np.array(
-            [-limit if a < -limit else (limit if a > limit else a) for a in angles])
+        self._steer_target = np.array([FLOATS.clip(a, -limit, limit) for a in angles])
         self._wheel_target = wheel_speed
 
     def brake(self) -> None:

@@ -24,6 +24,7 @@ from nfmr_dlsmc.core.schema import (
     positive_up_to,
     within,
 )
+from nfmr_dlsmc.core.sliding_functions import FLOATS
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
@@ -231,7 +232,7 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
             angle = 0.0 if hold_steer is None else float(hold_steer[i])
         if abs(angle) > limit + 1e-12:
             limited = True
-        steer.append(-limit if angle < -limit else (limit if angle > limit else angle))
+        steer.append(FLOATS.clip(angle, -limit, limit))
         speed.append(rate)
     return WheelCommands(steer=np.array(steer), wheel_speed=np.array(speed), limited=limited)
 
