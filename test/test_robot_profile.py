@@ -1,9 +1,10 @@
 """
-The robot profile's four options against hand-computed values, and its closed loop.
+The robot profile's options against hand-computed values, and its closed loop.
 
 The closed loop on the kinematic model; the pybullet loop is in test_pybullet_plant.py.
 """
 
+from dataclasses import replace
 import math
 
 from nfmr_dlsmc.core.disturbances import paper_disturbance
@@ -133,8 +134,40 @@ def test_profile_options_are_validated_with_their_names():
         DlsmcConfig(thetadot_source='model')
     with pytest.raises(ParameterError, match=r'thetadot_filter = 0.02 s: must be 0 with'):
         DlsmcConfig(thetadot_source='analytic', thetadot_filter=0.02)
+    with pytest.raises(ParameterError, match=r"align_speed = 'yes': must be true or false"):
+        DlsmcConfig(align_speed='yes')
     with pytest.raises(ParameterError, match="batch simulator implements the paper's law only"):
         simulate_batch(robot_params().dlsmc, make_trajectory('sine'), [(1.0, 4.0, 0.0)], 1.0)
+    assert DlsmcConfig().is_paper_law and not DlsmcConfig(align_speed=True).is_paper_law
+
+
+# -- the speed aligned with the heading --------------------------------------------------
+
+
+@pytest.mark.parametrize('heading_error', [0.0, 1e-3, 0.7, -1.2, 2.0, -math.pi + 1e-3])
+def test_align_speed_scales_the_paper_speed_by_the_cosine_of_theta_e(heading_error):
+    # The same first step of the paper's law and of the aligned one, from a pose whose
+    # heading is theta_d + heading_error: v = |u| max(cos(theta_e), 0) within [v_min, v_max];
+    # omega and the rest of the step as the paper's.
+    x, y, x_d, y_d, xdot_d, ydot_d = 0.3, -0.4, 0.0, 0.0, 0.5, 0.2
+    paper = DlsmcController(DlsmcConfig())
+    paper.step(x, y, 0.0, x_d, y_d, xdot_d, ydot_d)
+    theta = paper.theta_d + heading_error
+    paper.reset()
+    v_paper, omega_paper = paper.step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+    aligned = DlsmcController(DlsmcConfig(align_speed=True))
+    v, omega = aligned.step(x, y, theta, x_d, y_d, xdot_d, ydot_d)
+    limits = aligned.config.limits
+    assert aligned.s_theta == pytest.approx(heading_error, abs=1e-12)
+    assert aligned.v_raw == paper.v_raw == v_paper  # |u| = 0.79 m/s, within the limits
+    wanted = v_paper * max(math.cos(heading_error), 0.0)
+    assert v == pytest.approx(max(wanted, limits.v_min), rel=1e-12)
+    assert omega == omega_paper
+    assert aligned.v_saturated == (wanted < limits.v_min)
+    if abs(heading_error) <= 1e-3:
+        assert v == pytest.approx(v_paper, rel=1e-6)  # aligned: the paper's v
+    if abs(heading_error) >= math.pi / 2:
+        assert v == limits.v_min  # facing away: it turns at the least speed
 
 
 # -- the analytic thetadot_d ------------------------------------------------------------
@@ -210,6 +243,24 @@ def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
     assert m.hold_distance_max < 1e-3
     assert m.hold_theta_e_max < 1e-3
     assert m.hold_omega_tv < 0.1 and m.hold_omega_saturated == 0.0
+
+
+def test_align_speed_brings_the_robot_back_where_the_paper_speed_circles():
+    # From this start the paper's speed passes the reference a radian off and circles round
+    # it for half a minute at omega_max (the outer loop's, on the kinematic model too);
+    # slowed while it turns, the robot turns on a tight circle and locks on in 14 s.
+    params = robot_params()
+    assert params.dlsmc.align_speed  # the robot profile has it on
+    start, trajectory = (4.2, 1.3, 0.09), make_trajectory('lemniscate')
+    figures = {}
+    for align in (False, True):
+        config = replace(params.dlsmc, align_speed=align)
+        figures[align] = simulation_metrics(simulate(DlsmcController(config), trajectory,
+                                                     start, 60.0), hold_from=30.0)
+    assert figures[False].t_conv_1cm is None or figures[False].t_conv_1cm > 30.0
+    assert figures[True].t_conv_1cm < 15.0
+    assert figures[True].hold_distance_max < 1e-3
+    assert figures[True].hold_omega_saturated == 0.0
 
 
 def test_robot_profile_holds_the_band_through_the_case2_pulse_on_the_kinematic_model():

@@ -440,7 +440,7 @@ def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, where
     return ('Zhang et al., *Entropy* 2023, 25(1), 27, section 4.2, ' + setting + '. Inputs '
             'saturated at v in [0.2, 2] m/s, abs(omega) <= 1.59 rad/s for every controller. '
             f"Gains: `{gains_path}` (DLSMC: the paper's gains; DLSMC, robot profile: the "
-            "paper's gains with the five robot options of `config/robot_case1.yaml`; the "
+            "paper's gains with the six robot options of `config/robot_case1.yaml`; the "
             'others tuned on the kinematic model with the same budget, recorded in that '
             f'file). {runs} runs on {where} in {seconds:.1f} s (`nfmr-compare`).')
 

@@ -7,7 +7,7 @@ The blocks are those of ``config/comparison.yaml``; every controller has the sam
 ``dlsmc`` and ``dlsmc_robot`` are the same law
 (:class:`~nfmr_dlsmc.core.dlsmc.DlsmcController`); they differ only in their blocks: the
 paper's gains, and the robot profile of ``config/robot_case1.yaml`` (the paper's gains with
-the five robot options on).
+the six robot options on).
 """
 
 from dataclasses import fields
@@ -64,7 +64,8 @@ _SINGLE_LOOP = {
 
 #: The DLSMC's blocks: ``outer`` and ``inner`` sections and these DlsmcConfig options.
 _DLSMC_NAMES = ('dlsmc', 'dlsmc_robot')
-_DLSMC_OPTIONS = ('thetadot_source', 'thetadot_filter', 'omega_filter', 'omega_filter_band')
+_DLSMC_OPTIONS = ('thetadot_source', 'thetadot_filter', 'omega_filter', 'omega_filter_band',
+                  'align_speed')
 
 # name -> ((outer loop, its gains), (inner loop, its gains))
 _CRSMC_INNER = (loops.CrsmcInnerLoop, gains.CrsmcInnerGains)
@@ -126,8 +127,8 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
     block : dict, optional
         Its gains: ``{gain: value}`` for a single-loop law, ``{"outer": {...},
         "inner": {...}}`` for a cascade; the DLSMC's (``dlsmc``, ``dlsmc_robot``) may also
-        set ``thetadot_source``, ``thetadot_filter`` [s], ``omega_filter`` [s] and
-        ``omega_filter_band`` [rad] (:class:`DlsmcConfig`).
+        set ``thetadot_source``, ``thetadot_filter`` [s], ``omega_filter`` [s],
+        ``omega_filter_band`` [rad] and ``align_speed`` (:class:`DlsmcConfig`).
     limits : InputLimits, optional
         Input saturation shared by every controller (paper values by default).
     dt : float

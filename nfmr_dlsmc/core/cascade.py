@@ -32,7 +32,10 @@ class CascadeController(SaturatedController):
     4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
        attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
     5. saturation v in [v_min, v_max], |omega| <= omega_max (v_min lowered to a slower
-       reference's speed with ``follow_slow_reference``);
+       reference's speed with ``follow_slow_reference``); with ``align_speed`` the speed
+       saturated is v = sqrt(u_x^2 + u_y^2) max(cos(s_theta), 0) instead (robot option,
+       doc/design.md, D24): the robot slows down, and so turns on a tighter circle, while
+       its heading is far from theta_d;
     6. optionally (``omega_tau`` > 0) a first-order low-pass of omega from the second step
        on, time constant ``omega_tau`` (1 - abs(s_theta) / ``omega_band``) [s] (none from
        abs(s_theta) >= ``omega_band`` [rad] on).
@@ -48,22 +51,24 @@ class CascadeController(SaturatedController):
     s_theta : float
         Attitude sliding variable = theta_e [rad].
     v_raw, omega_raw : float
-        Inputs before saturation [m/s], [rad/s].
+        Inputs before saturation [m/s], [rad/s]; v_raw = sqrt(u_x^2 + u_y^2), before
+        ``align_speed`` too.
     v_saturated, omega_saturated : bool
-        Saturation flags.
+        Saturation flags: the limits changed the input.
     """
 
     #: Names of the values :meth:`telemetry` returns, in order.
     TELEMETRY_FIELDS = ('x_e', 'y_e', 'theta_d', 'thetadot_d', 'theta_e', 's_x', 's_y',
                         'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated')
 
-    __slots__ = ('name', '_filter_tau', '_omega_tau', '_omega_band', '_analytic', 'outer',
-                 'inner', '_has_previous', 'x_e', 'y_e', 'theta_d', 'thetadot_d', 's_theta',
-                 'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated', '_omega')
+    __slots__ = ('name', '_filter_tau', '_omega_tau', '_omega_band', '_analytic', '_align',
+                 'outer', 'inner', '_has_previous', 'x_e', 'y_e', 'theta_d', 'thetadot_d',
+                 's_theta', 'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated', '_omega')
 
     def __init__(self, outer, inner, limits: InputLimits | None = None, dt: float = 0.001,
                  filter_tau: float = 0.0, name: str = 'cascade', analytic_rate: bool = False,
-                 omega_tau: float = 0.0, omega_band: float = 0.005):
+                 omega_tau: float = 0.0, omega_band: float = 0.005,
+                 align_speed: bool = False):
         super().__init__(limits, dt)
         self.name = name
         self._analytic = analytic_rate
@@ -72,6 +77,7 @@ class CascadeController(SaturatedController):
         self._filter_tau = filter_tau  # [s]
         self._omega_tau = omega_tau  # [s] low-pass of the commanded omega (0: none)
         self._omega_band = omega_band  # [rad] abs(s_theta) at which it has faded out
+        self._align = align_speed  # v scaled by max(cos(s_theta), 0)
         self.reset()
 
     def reset(self) -> None:
@@ -122,7 +128,11 @@ class CascadeController(SaturatedController):
             v_ref = math.hypot(xdot_d, ydot_d)
             if v_ref < v_min:
                 v_min = v_ref
-        v = v_min if v_raw < v_min else (limits.v_max if v_raw > limits.v_max else v_raw)
+        s_theta = math.remainder(theta - theta_d, _TWO_PI)
+        if s_theta == -math.pi:
+            s_theta = math.pi
+        v_want = v_raw * max(math.cos(s_theta), 0.0) if self._align else v_raw
+        v = v_min if v_want < v_min else (limits.v_max if v_want > limits.v_max else v_want)
         # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
         if self._analytic:
             udot_x, udot_y = self.outer.input_rate(v * math.cos(theta) - xdot_d,
@@ -142,13 +152,10 @@ class CascadeController(SaturatedController):
         else:
             thetadot_d = 0.0
         self._has_previous = True
-        s_theta = math.remainder(theta - theta_d, _TWO_PI)
-        if s_theta == -math.pi:
-            s_theta = math.pi
         omega_raw = self.inner.step(s_theta, thetadot_d, dt)
         omega = limits.omega_max if omega_raw > limits.omega_max else (
             -limits.omega_max if omega_raw < -limits.omega_max else omega_raw)
-        self.v_saturated = v != v_raw
+        self.v_saturated = v != v_want
         self.omega_saturated = omega != omega_raw
         if self._omega_tau > 0.0 and self._omega is not None:
             # First-order low-pass of the saturated omega, its time constant fading out with

@@ -52,6 +52,7 @@ class DlsmcController(CascadeController):
         self._filter_tau = config.thetadot_filter
         self._omega_tau = config.omega_filter
         self._omega_band = config.omega_filter_band
+        self._align = config.align_speed
         self._analytic = config.thetadot_source == 'analytic'
         self.outer.gains = config.outer
         self.inner.gains = config.inner

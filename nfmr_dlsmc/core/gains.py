@@ -180,8 +180,9 @@ class DlsmcConfig:
     (``thetadot_filter``); ``analytic`` (robot profile) as the time derivative of
     theta_d = atan2(u_y, u_x) computed from the outer law and the kinematic model's error
     rate (see :meth:`~nfmr_dlsmc.core.outer_loop.BtintsmcOuterLoop.input_rate`;
-    doc/design.md, D5) ``omega_filter`` smooths the commanded omega (robot profile, doc/design.md,
-    D14).
+    doc/design.md, D5); ``omega_filter`` smooths the commanded omega (robot profile,
+    doc/design.md, D14); ``align_speed`` slows the robot down while its heading is far from
+    theta_d (robot profile, doc/design.md, D24).
     """
 
     outer: OuterLoopGains = field(default_factory=OuterLoopGains)
@@ -203,6 +204,11 @@ class DlsmcConfig:
                                      'abs(s_theta) = this: small corrections are smoothed, a '
                                      'large error (a disturbance) is answered at once',
                                      POSITIVE)
+    align_speed: bool = param(False, '', 'robot option: command v = |u| max(cos(theta_e), 0) '
+                              '(at least v_min) instead of |u|, so that the robot slows '
+                              'down, and turns on a tighter circle, while its heading is far '
+                              'from theta_d instead of looping round the reference; no '
+                              'effect once theta_e is small (false: the paper)', FLAG)
 
     def __post_init__(self):
         check_fields(self)
@@ -216,4 +222,4 @@ class DlsmcConfig:
         """Tell whether every robot-profile option is off (the paper's equations)."""
         return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
                 and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference'
-                and self.omega_filter == 0.0)
+                and self.omega_filter == 0.0 and not self.align_speed)
