@@ -56,10 +56,13 @@ class SimSettings:
                          "odometry's rate, latency, noise and bias walk "
                          "(disturbance.odom_*: set one or the other); '': those "
                          'parameters as given', one_of('', *SENSING_PRESETS), read_only=True)
-    realtime_max_lag: float = param(0.02, 's', 'realtime: the sim catches up a delay up to '
+    realtime_max_lag: float = param(0.003, 's', 'realtime: the sim catches up a delay up to '
                                     'this long by stepping without sleeping; beyond it the '
                                     'run continues slower than real time (counted and '
-                                    'logged)', NON_NEGATIVE)
+                                    'logged). Longer: closer to real time on a machine with '
+                                    'time to spare, but each catch-up is a burst of steps '
+                                    'the controller cannot tick through (D25)',
+                                    NON_NEGATIVE)
     lockstep_timeout: float = param(0.5, 's', 'wall time a lockstep step waits for its '
                                     'command', POSITIVE)
     command_timeout: float = param(0.1, 's', 'simulated time without a valid command after '
