@@ -4,8 +4,9 @@ from pathlib import Path
 import subprocess
 import sys
 
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path as PathMsg
 from nfmr_dlsmc.ros.controller_node import ControllerNode
+from nfmr_dlsmc.ros.path_publisher import PATH_OUT_QOS
 import pytest
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -41,8 +42,27 @@ def test_a_file_that_makes_no_path_is_one_line_and_exit_2(tmp_path, text, says):
 def test_without_a_controller_it_says_so_after_the_timeout_with_exit_1():
     done = run('paths/warehouse_loop.csv', '--topic', 'nobody_listens', '--timeout', '0.5')
     assert done.returncode == 1
-    assert done.stderr == ('nfmr-publish-path: no subscriber on /nobody_listens within 0.5 s '
-                           '(is a controller active on this ROS domain?)\n')
+    assert done.stderr == ('nfmr-publish-path: no controller on /nobody_listens within 0.5 s: '
+                           'none subscribes to it and answers on /reference_path_status (is a '
+                           'controller active on this ROS domain?)\n')
+
+
+@pytest.mark.ros
+def test_a_listener_that_is_no_controller_does_not_count_as_taking_the_path():
+    """A recorder subscribed to the path topic acknowledges it, but takes nothing."""
+    context = new_context()
+    listener = Node('recorder_like', context=context)
+    received = []
+    listener.create_subscription(PathMsg, 'listened_path_in', received.append, PATH_OUT_QOS)
+    spinner = Spinner(context, listener)
+    try:
+        done = run('paths/warehouse_loop.csv', '--topic', 'listened_path_in', '--timeout', '1')
+    finally:
+        spinner.close()
+        listener.destroy_node()
+        context.try_shutdown()
+    assert done.returncode == 1
+    assert 'no controller on /listened_path_in within 1 s' in done.stderr, done.stderr
 
 
 @pytest.mark.ros
@@ -73,8 +93,9 @@ def test_a_running_controller_follows_the_published_file(tmp_path):
         send(0.0)
         done = run(str(file))
         assert done.returncode == 0, done.stderr
-        assert done.stdout == f'nfmr-publish-path: 3 points (untimed) of {file} taken on ' \
-                              'reference_path_in\n'
+        assert done.stdout.startswith(f'nfmr-publish-path: 3 points (untimed) of {file} '
+                                      'taken on reference_path_in: following a new path from '
+                                      'the next tick: '), done.stdout
         wait_for(lambda: controller.session.params.trajectory_name == 'path' or
                  controller.session._next_reference is not None, what='the path taken')
         send(0.001)
@@ -82,6 +103,44 @@ def test_a_running_controller_follows_the_published_file(tmp_path):
         last = dict(zip(labels, states[-1].data))
         assert last['t'] == 0.0 and (last['x_d'], last['y_d']) == pytest.approx((1.0, 4.0))
         assert controller.session.params.trajectory.end_pose[:2] == pytest.approx((3.0, 6.0))
+    finally:
+        spinner.close()
+        controller.destroy_node()
+        peer.destroy_node()
+        context.try_shutdown()
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize('args, text, says', [
+    ((), 'x,y\n66.0,4.0\n68.0,4.0\n', 'refused: its first point'),
+    (('--frame', 'map'), 'x,y\n1.0,4.0\n3.0,4.0\n', "refused: it is in frame(s) 'map'"),
+])
+def test_a_path_the_controller_refuses_is_exit_1_with_its_reason(tmp_path, args, text, says):
+    file = tmp_path / 'path.csv'
+    file.write_text(text)
+    context = new_context()
+    controller = ControllerNode(context=context)
+    peer = Node('odometry', context=context)
+    odom = peer.create_publisher(Odometry, 'odom', QOS)
+    states = []
+    peer.create_subscription(Float64MultiArray, 'controller_state', states.append, QOS)
+    spinner = Spinner(context, controller, peer)
+    try:
+        controller.start()
+        wait_matched(odom)
+        msg = Odometry()
+        msg.header.frame_id = 'odom'
+        msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
+        msg.pose.pose.orientation.w = 1.0
+        odom.publish(msg)
+        wait_for(lambda: states, what='a controller reply')
+        trajectory = controller.session.params.trajectory
+        done = run(str(file), *args)
+        assert done.returncode == 1, done.stdout
+        assert done.stderr.startswith(f'nfmr-publish-path: {says}'), done.stderr
+        assert done.stderr.count('\n') == 1
+        assert controller.session.params.trajectory is trajectory
+        assert controller.session._next_reference is None
     finally:
         spinner.close()
         controller.destroy_node()

@@ -33,7 +33,7 @@ def _parser() -> OneLineParser:
                              '(default odom)')
     parser.add_argument('--timeout', type=positive_number, default=10.0, metavar='S',
                         help='wait at most S seconds for a controller, then for its '
-                             'acknowledgement (default 10)')
+                             'answer (default 10)')
     return parser
 
 
@@ -41,8 +41,9 @@ def main(argv=None) -> int:
     """
     Run ``nfmr-publish-path``; return the exit status.
 
-    That is 0 once a controller has the path, 1 when none took it within the timeout, 2 on
-    a bad option or file, 130 on Ctrl-C or SIGTERM.
+    That is 0 once a controller has taken the path (its answer on ``reference_path_status``),
+    1 when it refused it (its reason printed) or none answered within the timeout, 2 on a bad
+    option or file, 130 on Ctrl-C or SIGTERM.
     """
     return run_command(_parser(), _run, argv)
 
@@ -54,12 +55,13 @@ def _run(args) -> int:
     load_path_trajectory(file)  # a file that makes no path fails here, naming its line
     points = load_path(file)
     check_ros_log_folder()
-    problem = publish_path(points, PublishOptions(args.topic, args.frame, args.timeout))
-    if problem:
-        print(f'nfmr-publish-path: {problem}', file=sys.stderr)
+    result = publish_path(points, PublishOptions(args.topic, args.frame, args.timeout))
+    if not result.taken:
+        print(f'nfmr-publish-path: {result.message}', file=sys.stderr)
         return 1
     kind = 'timed' if points.shape[1] == 3 else 'untimed'
-    print(f'nfmr-publish-path: {len(points)} points ({kind}) of {file} taken on {args.topic}')
+    print(f'nfmr-publish-path: {len(points)} points ({kind}) of {file} taken on {args.topic}: '
+          f'{result.message}')
     return 0
 
 

@@ -20,7 +20,11 @@ timed by ``trajectory.path.*``). A valid one replaces the reference at the next 
 (:meth:`TrackingSession.replace_reference`) and is published on ``reference_path``; one
 in another frame, with fewer than two distinct points, a non-finite coordinate, stamps that
 go back, a cusp, or a first point more than ``max_start_distance`` from the robot is
-refused in one logged line, and the previous reference stays.
+refused in one logged line, and the previous reference stays. Each path taken or refused
+is answered on ``reference_path_status`` (diagnostic_msgs/DiagnosticStatus, reliable,
+volatile): level OK when taken, ERROR when refused, the message saying what was taken or
+why not, and the values ``stamp`` (the path's header stamp, ``sec.nanosec``), ``frame`` and
+``poses``, by which a sender knows the answer is to its path (:func:`path_answer`).
 
 Lifecycle (``rclpy.lifecycle``; ``ros2 lifecycle set /controller <transition>``):
 
@@ -87,6 +91,8 @@ PATH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 MARKER_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 #: Paths from outside: reliable, volatile (matches a transient-local publisher too).
 PATH_IN_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
+#: Answers to paths from outside: reliable, volatile, a few kept for a slow reader.
+PATH_STATUS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
@@ -97,6 +103,32 @@ ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribe
 STATE_ACK_TIMEOUT = 5.0
 _REFERENCE_FIELDS = tuple(STATE_FIELDS.index(name) for name in ('x_d', 'y_d', 'theta_d'))
 _ARRIVAL_FIELD = STATE_FIELDS.index('arrival')
+
+
+def path_stamp(stamp) -> str:
+    """Return a header stamp as the ``stamp`` value of a path answer (``sec.nanosec``)."""
+    return f'{stamp.sec}.{stamp.nanosec:09d}'
+
+
+def path_answer(msg: Path, topic: str, problem: str | None, summary: str) -> DiagnosticStatus:
+    """
+    Return the answer on ``reference_path_status`` to the path ``msg`` received on ``topic``.
+
+    Parameters
+    ----------
+    problem : str or None
+        Why the path was refused; None when it was taken.
+    summary : str
+        What was taken (its points, length and duration), used when ``problem`` is None.
+
+    """
+    status = DiagnosticStatus(name=topic, hardware_id='dlsmc')
+    status.level = DiagnosticStatus.OK if problem is None else DiagnosticStatus.ERROR
+    status.message = summary if problem is None else f'refused: {problem}'
+    status.values = [KeyValue(key='stamp', value=path_stamp(msg.header.stamp)),
+                     KeyValue(key='frame', value=msg.header.frame_id),
+                     KeyValue(key='poses', value=str(len(msg.poses)))]
+    return status
 
 
 def _session_options(values: dict) -> dict:
@@ -159,6 +191,8 @@ class ControllerNode(SchemaLifecycleNode):
         self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
         self._loop = LoopThread(self._clock_loop, 'dlsmc-1khz', node=self)
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._path_status_pub = self.create_publisher(DiagnosticStatus, 'reference_path_status',
+                                                      PATH_STATUS_QOS)
         self._diag_timer = self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
         self._diag_at = self.get_clock().now()  # the last report, or the activation
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -370,10 +404,11 @@ class ControllerNode(SchemaLifecycleNode):
                     'odom or sim_clock (or use_sim_time)')
 
     def _on_path(self, msg: Path) -> None:
-        """Follow a path from outside from the next tick, or say why not."""
+        """Follow a path from outside from the next tick, or say why not; answer either way."""
         frame = self._values['odom_frame']
         frames = {msg.header.frame_id} | {p.header.frame_id for p in msg.poses} - {''}
         session = self.session
+        topic = self._path_sub.topic_name if self._path_sub is not None else 'reference_path_in'
         try:
             if frames != {frame}:
                 raise PathError(f"it is in frame(s) {', '.join(map(repr, sorted(frames)))}, "
@@ -382,17 +417,26 @@ class ControllerNode(SchemaLifecycleNode):
                 [(p.pose.position.x, p.pose.position.y) for p in msg.poses],
                 [p.header.stamp.sec + p.header.stamp.nanosec * 1e-9 for p in msg.poses]))
         except PathError as exc:
-            self.get_logger().error(f'reference_path_in: path of {len(msg.poses)} poses '
-                                    f'refused: {exc.rule}; the previous reference stays')
+            self._refuse_path(msg, topic, exc.rule)
             return
         with self._lock:
-            if not self._active or self.session is not session:
-                return
-            session.replace_reference(reference)
+            taken = self._active and self.session is session
+            if taken:
+                session.replace_reference(reference)
+        if not taken:
+            self._refuse_path(msg, topic, 'the controller is no longer active')
+            return
         self._publish_path(reference)
-        self.get_logger().info(f'reference_path_in: following a new path from the next tick: '
-                               f'{len(reference.points)} points, {reference.length:.2f} m, '
-                               f'{reference.duration:.1f} s')
+        summary = (f'following a new path from the next tick: {len(reference.points)} points, '
+                   f'{reference.length:.2f} m, {reference.duration:.1f} s')
+        self.get_logger().info(f'{topic}: {summary}')
+        self._path_status_pub.publish(path_answer(msg, topic, None, summary))
+
+    def _refuse_path(self, msg: Path, topic: str, problem: str) -> None:
+        """Log and answer the refusal of the path ``msg``; the previous reference stays."""
+        self.get_logger().error(f'{topic}: path of {len(msg.poses)} poses refused: {problem}; '
+                                'the previous reference stays')
+        self._path_status_pub.publish(path_answer(msg, topic, problem, ''))
 
     def _on_clock(self, msg: Clock) -> None:
         """tick_source sim_clock: one step per simulated step, at its time."""

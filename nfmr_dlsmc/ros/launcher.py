@@ -65,6 +65,7 @@ RUN_TOPICS = {
     '/controller_state': 'std_msgs/msg/Float64MultiArray',
     '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray', '/rosout': 'rcl_interfaces/msg/Log',
     '/reference_path': 'nav_msgs/msg/Path',
+    '/reference_path_status': 'diagnostic_msgs/msg/DiagnosticStatus',
     '/robot_markers': 'visualization_msgs/msg/MarkerArray',
 }
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
