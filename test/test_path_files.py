@@ -1,12 +1,23 @@
 """Path files: CSV and YAML points, every error naming the file, line and column."""
 
 import math
+import os
 from pathlib import Path
 import pickle
+import socket
+import threading
 
 from nfmr_dlsmc.core.errors import NfmrError
-from nfmr_dlsmc.core.path_reference import PathProfile, PathTrajectory
-from nfmr_dlsmc.runtime.path_files import load_path, load_path_trajectory, PathFileError
+from nfmr_dlsmc.core.path_reference import PathError, PathProfile, PathTrajectory, stamped_points
+from nfmr_dlsmc.runtime import path_files
+from nfmr_dlsmc.runtime.params import controller_params
+from nfmr_dlsmc.runtime.path_files import (
+    load_path,
+    load_path_trajectory,
+    MAX_FILE_SIZE,
+    PathFileError,
+)
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 from nfmr_dlsmc.runtime.user_errors import report_user_error, USER_ERROR_STATUS
 import numpy as np
 import pytest
@@ -62,6 +73,15 @@ def test_a_yaml_path(tmp_path, name, text, expected):
     np.testing.assert_array_equal(load_path(_write(tmp_path, name, text)), expected)
 
 
+@pytest.mark.parametrize('name, text', [('sheet.csv', '# from a spreadsheet\nx,y\n0,0\n1,2\n'),
+                                        ('sheet.csv', 'x,y\n0,0\n1,2\n'),
+                                        ('list.yaml', '- [0, 0]\n- [1, 2]\n')])
+def test_a_byte_order_mark_is_skipped(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_bytes(b'\xef\xbb\xbf' + text.encode())  # UTF-8 with BOM, as Excel saves it
+    np.testing.assert_array_equal(load_path(path), [[0.0, 0.0], [1.0, 2.0]])
+
+
 # -- errors ---------------------------------------------------------------------------------
 
 CSV_ERRORS = [
@@ -79,6 +99,7 @@ CSV_ERRORS = [
     ('x,y\n0,0\n1,\n', 3, 'y', "'' is not a number"),
     ('t,x,y\n0,0,0\nnan,1,1\n', 3, 't', "'nan' is not a finite number"),
     ('x,y\n0,0\n1,-inf\n', 3, 'y', "'-inf' is not a finite number"),
+    ('x,y\n0,0\n1e400,0\n', 3, 'x', "'1e400' is not a finite number"),
 ]
 
 
@@ -100,6 +121,8 @@ YAML_ERRORS = [
     ('- [0, 0]\n- [true, 1]\n', 2, 'x', "'true' is not a number"),
     ('- [0, 0]\n- [.nan, 1]\n', 2, 'x', "'.nan' is not a finite number"),
     ('- [0, 0]\n- [1, [2]]\n', 2, 'y', 'expected a number, found a list or mapping'),
+    # An integer past the floats.
+    (f'- [0, 0]\n- [1{"0" * 400}, 1]\n', 2, 'x', f"'1{'0' * 400}' is not a finite number"),
     ('- [0, 0]\n- [0, 1, 1]\n', 2, None, '3 numbers, but the first point (line 1) has 2: '
                                          '[x, y]'),
     ('- [0, 0, 0, 0]\n', 1, None, 'a point is a list [x, y] or [t, x, y]'),
@@ -132,6 +155,66 @@ def test_a_missing_file_or_a_folder_is_refused_naming_it(tmp_path):
         load_path(tmp_path / 'binary.csv')
 
 
+def _refusal(path) -> str:
+    """Return the message load_path refuses ``path`` with, within 10 s (a FIFO may block)."""
+    found = []
+
+    def load():
+        with pytest.raises(PathFileError) as caught:
+            load_path(path)
+        found.append(str(caught.value))
+
+    worker = threading.Thread(target=load, daemon=True)
+    worker.start()
+    worker.join(10.0)
+    if worker.is_alive():  # blocked opening the FIFO: a writer lets it go
+        os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK))
+        worker.join(10.0)
+        pytest.fail(f'load_path({path}) blocked')
+    assert found, 'no PathFileError'
+    return found[0]
+
+
+@pytest.mark.parametrize('kind', ['a character device', 'a FIFO', 'a socket'])
+def test_only_a_regular_file_is_read(tmp_path, monkeypatch, kind):
+    monkeypatch.chdir(tmp_path)  # a socket's path is short: 108 bytes at most
+    if kind == 'a character device':
+        path = '/dev/zero'  # read whole, it would take all memory
+    elif kind == 'a FIFO':
+        path = 'route.csv'
+        os.mkfifo(path)  # opened, it would wait for a writer
+    else:
+        path = 'route.csv'
+        server = socket.socket(socket.AF_UNIX)
+        server.bind(path)
+        server.close()
+    assert _refusal(path) == f'{path}: is not a regular file ({kind}), expected a path file'
+
+
+def test_a_file_larger_than_the_limit_is_refused_unread(tmp_path, monkeypatch):
+    with open(tmp_path / 'huge.csv', 'wb') as stream:
+        stream.truncate(MAX_FILE_SIZE + 1)  # sparse: no disk space taken
+    assert MAX_FILE_SIZE == 8 * 2 ** 20
+    with pytest.raises(PathFileError, match=r'huge.csv: is 8.0 MiB, larger than the 8 MiB a '
+                                            'path file may have$'):
+        load_path(tmp_path / 'huge.csv')
+    path = _write(tmp_path, 'l.csv', 'x,y\n0,0\n4,0\n')  # 12 bytes
+    monkeypatch.setattr(path_files, 'MAX_FILE_SIZE', 12)
+    assert load_path(path).shape == (2, 2)  # as large as allowed
+    monkeypatch.setattr(path_files, 'MAX_FILE_SIZE', 11)
+    with pytest.raises(PathFileError, match='l.csv: is 0.0 MiB, larger than the 1.04904e-05 '
+                                            'MiB'):
+        load_path(path)
+
+
+def test_a_file_longer_than_its_size_says_is_read_only_up_to_the_limit(monkeypatch):
+    # Files under /proc say they are empty, as one growing while read would be larger.
+    assert os.stat('/proc/self/maps').st_size == 0
+    monkeypatch.setattr(path_files, 'MAX_FILE_SIZE', 100)
+    assert _refusal('/proc/self/maps') == ('/proc/self/maps: is larger than the 9.53674e-05 MiB '
+                                           'a path file may have')
+
+
 def test_a_path_file_error_is_a_user_error_of_one_line(tmp_path, capsys):
     path = _write(tmp_path, 'warehouse.csv', 'x,y\n0,zero\n')
     with pytest.raises(NfmrError) as caught:
@@ -157,6 +240,49 @@ def test_points_that_make_no_path_are_refused_naming_their_line(tmp_path):
     path = _write(tmp_path, 'one.csv', 'x,y\n1,1\n1,1\n')
     with pytest.raises(PathFileError, match=r'one.csv: 1 distinct point\(s\) \(2 given'):
         load_path_trajectory(path)
+
+
+def test_huge_numbers_are_refused_naming_their_line(tmp_path):
+    path = _write(tmp_path, 'far.csv', 'x,y\n0,0\n# far away\n1e200,0\n')
+    with pytest.raises(PathFileError) as caught:
+        load_path_trajectory(path)  # not scipy's "dydx must contain only finite values"
+    assert str(caught.value) == (f'{path} line 4: point 1 at (1e+200, 0.00) m: a coordinate is '
+                                 'beyond +-1e+08 m, farther than any map reaches (are the units '
+                                 'metres?)')
+    path = _write(tmp_path, 'late.yaml', '- [0, 0, 0]\n- [1.0e+300, 1, 1]\n')
+    with pytest.raises(PathFileError, match=r'late.yaml line 2: point 1 at \(1.00, 1.00\) m: '
+                                            r'its stamp 1e\+300 s is after 1e\+09 s'):
+        load_path_trajectory(path)
+
+
+def test_stamps_faster_than_the_robot_are_refused_naming_their_line(tmp_path):
+    path = _write(tmp_path, 'dash.csv', 't,x,y\n0,0,0\n1,1,0\n1.000000001,2,0\n')
+    with pytest.raises(PathFileError) as caught:
+        load_path_trajectory(path)
+    assert str(caught.value) == (f'{path} line 4: point 2 at (2.00, 0.00) m: the stamps ask '
+                                 'for 1e+09 m/s between this point and the one before (1 m in '
+                                 "1e-09 s); the robot's v_max is 2 m/s")
+    path = _write(tmp_path, 'walk.csv', 't,x,y\n0,0,0\n1,1,0\n2.25,2,0\n')
+    slow = PathProfile(v_max=0.8)
+    with pytest.raises(PathFileError, match=r'walk.csv line 3: .* ask for 1 m/s .* v_max is '
+                                            '0.8 m/s'):
+        load_path_trajectory(path, slow)
+    path = _write(tmp_path, 'walk.csv', 't,x,y\n0,0,0\n1.25,1,0\n2.5,2,0\n')
+    assert load_path_trajectory(path, slow).duration == 2.5  # 0.8 m/s: as fast as it goes
+
+
+def test_the_speed_limit_of_timed_paths_is_the_controllers_v_max(tmp_path):
+    path = _write(tmp_path, 'walk.csv', 't,x,y\n0,0,0\n1,1,0\n')
+    values = {'trajectory.name': 'path', 'trajectory.path.file': str(path)}
+    assert controller_params(values).trajectory.duration == 1.0  # 1 m/s, v_max 2 m/s
+    slow = values | {'limits.v_max': 0.8}
+    with pytest.raises(PathFileError, match=r"walk.csv line 3: .* the robot's v_max is 0.8 m/s"):
+        controller_params(slow)  # nfmr-eval, nfmr-run, the controller node's file
+    params = controller_params(slow | {'trajectory.name': 'line'})
+    assert params.path_profile.v_max == 0.8
+    session = TrackingSession(params, odom_timeout=0.25)
+    with pytest.raises(PathError, match=r"point 1 .* the robot's v_max is 0.8 m/s"):
+        session.path_reference(stamped_points([(0.0, 0.0), (1.0, 0.0)], [3.0, 4.0]))  # a Path
 
 
 def test_a_path_file_gives_its_trajectory(tmp_path):

@@ -8,10 +8,14 @@ import timeit
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
 from nfmr_dlsmc.core.path_reference import (
+    MAX_COORDINATE,
+    MAX_STAMP,
     MERGE_DISTANCE,
+    MIN_STAMP_STEP,
     PathError,
     PathProfile,
     PathTrajectory,
+    stamped_points,
 )
 from nfmr_dlsmc.core.schema import params_of
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
@@ -77,12 +81,12 @@ def _turns(points):
 def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     declared = {p.name: p for p in params_of(PathProfile)}
     assert list(declared) == [f'trajectory.path.{n}' for n in (
-        'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
+        'speed', 'lateral_acceleration', 'omega_max', 'v_max', 'acceleration', 'deceleration',
         'corner_radius', 'start_speed', 'curvature_rate')]
     assert [declared[f'trajectory.path.{n}'].default for n in (
-        'speed', 'lateral_acceleration', 'omega_max', 'acceleration', 'deceleration',
-        'corner_radius', 'start_speed', 'curvature_rate')] == [0.5, 0.5, 1.0, 0.3, 0.3, 0.3,
-                                                               0.0, 2.5]
+        'speed', 'lateral_acceleration', 'omega_max', 'v_max', 'acceleration', 'deceleration',
+        'corner_radius', 'start_speed', 'curvature_rate')] == [0.5, 0.5, 1.0, 2.0, 0.3, 0.3,
+                                                               0.3, 0.0, 2.5]
     assert declared['trajectory.path.lateral_acceleration'].unit == 'm/s^2'
     assert declared['trajectory.path.curvature_rate'].unit == '1/(m*s)'
     assert declared['trajectory.path.curvature_rate'].rule_text == '> 0'
@@ -94,6 +98,7 @@ def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     ({'speed': -1.0}, 'trajectory.path.speed = -1.0 m/s: must be > 0'),
     ({'lateral_acceleration': 0.0}, 'trajectory.path.lateral_acceleration = 0.0 m/s^2: must'),
     ({'omega_max': math.inf}, 'trajectory.path.omega_max = inf rad/s: must be a finite'),
+    ({'v_max': 0.0}, 'trajectory.path.v_max = 0.0 m/s: must be > 0'),
     ({'acceleration': 'fast'}, "trajectory.path.acceleration = 'fast' m/s^2: must be a real"),
     ({'deceleration': -0.3}, 'trajectory.path.deceleration = -0.3 m/s^2: must be > 0'),
     ({'corner_radius': -0.1}, 'trajectory.path.corner_radius = -0.1 m: must be >= 0'),
@@ -223,6 +228,21 @@ def test_points_closer_than_a_millimetre_merge_into_the_first():
     ([1.0, 2.0, 3.0], None, 'must be a list of points: (N, 2) of x, y [m] or (N, 3) of t, x, '
                             'y [s, m, m]; got shape (3,)'),
     ([(1.0, 2.0, 3.0, 4.0)] * 3, None, 'got shape (3, 4)'),
+    # Finite but huge: their squares in the spline would overflow (a traceback of scipy's).
+    ([(0.0, 0.0), (1.0, 0.0), (1e200, 0.0)], 2, 'point 2 at (1e+200, 0.00) m: a coordinate '
+                                                'is beyond +-1e+08 m'),
+    ([(0.0, 0.0), (0.0, -1e12)], 1, 'point 1 at (0.00, -1e+12) m: a coordinate is beyond'),
+    ([(0.0, 0.0, 0.0), (1e300, 1.0, 0.0)], 1, 'point 1 at (1.00, 0.00) m: its stamp 1e+300 s '
+                                              'is after 1e+09 s (32 years)'),
+    ([(0.0, 0.0, 0.0), (1e200, 1e200, 0.0)], 1, 'point 1 at (1e+200, 0.00) m: a coordinate'),
+    # Stamps asking for more than the robot's v_max, 2 m/s by default.
+    ([(0.0, 0.0, 0.0), (1e-300, 1.0, 0.0)], 1, 'point 1 at (1.00, 0.00) m: the stamps ask for '
+                                               '1e+300 m/s between this point and the one '
+                                               "before (1 m in 1e-300 s); the robot's v_max is "
+                                               '2 m/s'),
+    ([(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (2.0, 3.0, 0.0), (3.0, 6.0, 0.0)], 3,
+     'point 3 at (6.00, 0.00) m: the stamps ask for 3 m/s between this point and the one '
+     'before (3 m in 1 s)'),
     ([(0.0, 0.0), (1.0,)], None, 'must be a list of points'),
     ([('a', 'b'), (1.0, 1.0)], None, 'must be a list of points'),
 ])
@@ -236,6 +256,53 @@ def test_a_path_that_cannot_be_followed_is_refused_naming_the_point(points, inde
     assert message in str(caught.value)
     again = pickle.loads(pickle.dumps(caught.value))
     assert str(again) == str(caught.value) and again.index == index
+
+
+def test_up_to_the_bounds_a_path_is_followed():
+    far = PathTrajectory.from_points([(-MAX_COORDINATE, MAX_COORDINATE),
+                                      (MAX_COORDINATE, MAX_COORDINATE)])
+    assert far.length == pytest.approx(2.0 * MAX_COORDINATE)
+    late = PathTrajectory.from_points([(0.0, 0.0, 0.0), (MAX_STAMP, 1.0, 0.0)])
+    assert late.duration == MAX_STAMP
+    # 1 m in 0.5 s is the default v_max, 2 m/s; 0.4 m in 0.5 s that of a slower robot.
+    fast = PathTrajectory.from_points([(0.0, 0.0, 0.0), (0.5, 1.0, 0.0), (1.0, 2.0, 0.0)])
+    assert fast.sample(0.5)[:2] == pytest.approx((1.0, 0.0))
+    slow = PathProfile(v_max=0.8)
+    PathTrajectory.from_points([(0.0, 0.0, 0.0), (0.5, 0.4, 0.0)], slow)
+    with pytest.raises(PathError, match=r"ask for 0.802 m/s .*; the robot's v_max is 0.8 m/s"):
+        PathTrajectory.from_points([(0.0, 0.0, 0.0), (0.5, 0.401, 0.0)], slow)
+    # Merged points keep the first's stamp: 0.9 mm in 0.1 ms (9 m/s) asks for nothing.
+    merged = PathTrajectory.from_points([(0.0, 0.0, 0.0), (1e-4, 0.0009, 0.0),
+                                         (1.0, 1.0, 0.0)])
+    assert merged.stamps.tolist() == [0.0, 1.0]
+
+
+def test_stamps_closer_than_a_microsecond_are_refused_whatever_v_max():
+    points = [(0.0, 0.0, 0.0), (1e-9, 1.0, 0.0), (1.0, 2.0, 0.0)]
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points, PathProfile(v_max=1e300))
+    assert caught.value.index == 1
+    assert str(caught.value).endswith('point 1 at (1.00, 0.00) m: its stamp comes 1e-09 s '
+                                      "after the previous point's; stamps must be 1e-06 s "
+                                      'apart at least')
+    points[1] = (MIN_STAMP_STEP, 1.0, 0.0)
+    traj = PathTrajectory.from_points(points, PathProfile(v_max=1e300))
+    assert np.isfinite(traj.sample(np.linspace(0.0, 2.0, 101))).all()
+
+
+@pytest.mark.parametrize('xy, stamps, index, message', [
+    ([(0.0, 0.0), (1e200, 0.0)], [5.0, 5.0], 1, 'a coordinate is beyond +-1e+08 m'),
+    ([(0.0, 0.0), (1e200, 0.0)], [5.0, 6.0], 1, 'a coordinate is beyond +-1e+08 m'),
+    ([(0.0, 0.0), (1.0, 0.0)], [5.0, 5.000000001], 1, 'the stamps ask for 1e+09 m/s'),
+    ([(0.0, 0.0), (1.0, 0.0)], [0.0, 2.0 ** 31], 1, 'its stamp 2.14748e+09 s is after 1e+09 s'),
+])
+def test_a_path_of_stamped_poses_with_huge_numbers_is_refused_naming_the_pose(xy, stamps,
+                                                                              index, message):
+    # As the controller node takes a nav_msgs/Path (stamps of int32 seconds and nanoseconds).
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(stamped_points(xy, stamps))
+    assert caught.value.index == index
+    assert message in str(caught.value)
 
 
 def test_a_sharp_turn_short_of_a_cusp_is_followed():
@@ -510,9 +577,9 @@ def test_any_points_give_a_finite_reference_or_a_parameter_error(points, repeat,
     given_points = np.array(points, dtype=float).reshape(-1, 2)
     if timed:
         given_points = np.column_stack([np.arange(len(points), dtype=float), given_points])
-    try:
-        traj = PathTrajectory.from_points(given_points, PathProfile(corner_radius=radius,
-                                                                    start_speed=start))
+    try:  # 1 s apart, 141 m/s at most: a v_max above keeps the timed paths
+        traj = PathTrajectory.from_points(given_points, PathProfile(
+            corner_radius=radius, start_speed=start, v_max=150.0))
     except ParameterError:
         return
     assert np.isfinite(traj.duration) and traj.duration > 0.0
@@ -524,3 +591,28 @@ def test_any_points_give_a_finite_reference_or_a_parameter_error(points, repeat,
         assert np.all(np.isfinite(traj.sample(float(ti)) + traj.acceleration(float(ti))))
     assert traj.sample(traj.duration + 1.0)[:2] == pytest.approx(tuple(traj.points[-1]),
                                                                  abs=1e-6)
+
+
+ANY_FLOAT = st.one_of(st.floats(allow_nan=False, allow_infinity=False),
+                      st.sampled_from([0.0, 1e-300, 5e-324, MAX_COORDINATE, 1e200, -1e300]))
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(points=st.lists(st.tuples(ANY_FLOAT, ANY_FLOAT, ANY_FLOAT), min_size=2, max_size=6),
+       radius=st.sampled_from([0.0, 0.3]), timed=st.booleans(),
+       v_max=st.sampled_from([2.0, 1e300]))
+def test_any_finite_numbers_give_a_finite_reference_or_a_parameter_error(points, radius, timed,
+                                                                         v_max):
+    given_points = np.array(points)
+    if timed:
+        given_points[:, 0] = np.sort(np.abs(given_points[:, 0]))
+    else:
+        given_points = given_points[:, 1:]
+    try:
+        traj = PathTrajectory.from_points(given_points, PathProfile(corner_radius=radius,
+                                                                    v_max=v_max))
+    except ParameterError:
+        return
+    t = np.linspace(-1.0, traj.duration + 1.0, 50)
+    for value in traj.sample(t) + traj.acceleration(t) + (traj.length, traj.duration):
+        assert np.all(np.isfinite(value))

@@ -10,7 +10,8 @@ The points are untimed, ``(x, y)`` [m], or timed, ``(t, x, y)`` [s, m, m]. The r
 built in four steps:
 
 1. Consecutive points closer than :data:`MERGE_DISTANCE` merge (the first is kept); a path
-   that turns back on itself (a turn over :data:`CUSP_ANGLE` at a point) is refused.
+   that turns back on itself (a turn over :data:`CUSP_ANGLE` at a point) is refused, as is
+   a coordinate beyond :data:`MAX_COORDINATE` or a stamp after :data:`MAX_STAMP`.
 2. Each interior corner is replaced by a circular arc tangent to both segments. Its radius
    is :attr:`PathProfile.corner_radius`, or larger at a gentle bend: as large as cuts the
    corner by no more than a right angle of that radius is cut, ``(sqrt(2) - 1)
@@ -28,7 +29,10 @@ built in four steps:
    to rest at the last point. Between two samples of the dense grid the acceleration is
    constant, so time follows in closed form, dt = 2 ds / (v_k + v_k+1), finite with v = 0 at
    the ends. Timed: s(t) is a monotone cubic through the points' (t_i, s_i), at rest at the
-   first and last stamps (none of the speed limits applies).
+   first and last stamps (none of the speed limits applies). A timed path whose stamps ask
+   for more than :attr:`PathProfile.v_max` between two points (the distance over the time
+   between their stamps) is refused: the robot would fall behind it; so are stamps closer
+   than :data:`MIN_STAMP_STEP`.
 
 The curvature rate. A robot that steers its wheels turns them as the curvature of its path
 changes, at dkappa/dt = v dkappa/ds. Where a corner's arc meets a straight, kappa rises
@@ -73,8 +77,8 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator, PPoly
 from scipy.ndimage import gaussian_filter1d
 
-__all__ = ['CUSP_ANGLE', 'MERGE_DISTANCE', 'PathError', 'PathProfile', 'PathTrajectory',
-           'SMOOTHING', 'stamped_points']
+__all__ = ['CUSP_ANGLE', 'MAX_COORDINATE', 'MAX_STAMP', 'MERGE_DISTANCE', 'MIN_STAMP_STEP',
+           'PathError', 'PathProfile', 'PathTrajectory', 'SMOOTHING', 'stamped_points']
 
 #: Consecutive points closer than this merge into the first of them [m].
 MERGE_DISTANCE = 1e-3
@@ -83,6 +87,17 @@ CUSP_ANGLE = math.radians(170.0)
 #: Width (standard deviation) of the Gaussian that makes the curvature continuous, as a
 #: share of the smallest corner arc radius or segment, whichever is shorter [-].
 SMOOTHING = 0.1
+#: Largest |x| or |y| of a point [m]: 100,000 km, beyond any map frame (UTM northings stay
+#: under 1e7 m), where a float still resolves 15 nm. Larger numbers are a mistake (units?),
+#: and their squares and cubes in the spline would overflow.
+MAX_COORDINATE = 1e8
+#: Latest stamp of a timed path [s]: about 32 years after its start, where a float still
+#: resolves 0.1 us (absolute clock times, 1.7e9 s since 1970, are refused).
+MAX_STAMP = 1e9
+#: Least time between the stamps of two points [s]: a millimetre (the least distance of two
+#: points once merged) in less is over 1 km/s, beyond any robot; it keeps the timing's
+#: coefficients finite whatever PathProfile.v_max.
+MIN_STAMP_STEP = 1e-6
 
 #: A turn at a point below this is left to the spline, not rounded [rad].
 _STRAIGHT_TURN = 1e-9
@@ -141,6 +156,8 @@ class PathProfile:
                                         'speed is at most sqrt(this / kappa)', POSITIVE)
     omega_max: float = param(1.0, 'rad/s', 'largest v kappa, the yaw rate of the reference '
                              "(give the controller's limit)", POSITIVE)
+    v_max: float = param(2.0, 'm/s', 'largest speed the stamps of a timed path may ask for '
+                         "between two points (give the controller's limits.v_max)", POSITIVE)
     acceleration: float = param(0.3, 'm/s^2', 'largest speed-up along the path', POSITIVE)
     deceleration: float = param(0.3, 'm/s^2', 'largest slow-down along the path, which ends '
                                 'at rest', POSITIVE)
@@ -206,7 +223,9 @@ class PathTrajectory:
             (N, 2) of x, y [m], untimed: ``profile`` sets the speed. Or (N, 3) of t, x, y
             [s, m, m], timed: point i is reached at t_i (the speed profile is not used; the
             reference is at rest at the first and last stamps). Stamps are >= 0 and
-            increase strictly after merging.
+            increase strictly after merging, by :data:`MIN_STAMP_STEP` at least, and ask for
+            no more than ``profile.v_max`` between two points. Coordinates are within
+            :data:`MAX_COORDINATE`, stamps at most :data:`MAX_STAMP`.
         profile : PathProfile, optional
             Speed limits and corner radius; the defaults when omitted.
 
@@ -214,14 +233,15 @@ class PathTrajectory:
         ------
         PathError
             (a :class:`~nfmr_dlsmc.core.validation.ParameterError`) for fewer than 2
-            distinct points, a coordinate or stamp that is not a finite number, a cusp, or
-            stamps that do not increase; the message names the point (0 is the first).
+            distinct points, a coordinate or stamp that is not a finite number or is out of
+            bounds, a cusp, stamps that do not increase or ask for more than ``v_max``; the
+            message names the point (0 is the first).
 
         """
         profile = PathProfile() if profile is None else profile
         if not isinstance(profile, PathProfile):
             raise TypeError(f'profile must be a PathProfile, not {type(profile).__name__}')
-        xy, stamps, _ = _checked_points(points)
+        xy, stamps, _ = _checked_points(points, profile.v_max)
         if profile.corner_radius > 0.0:
             u, dense, vertex_u = _rounded(xy, profile.corner_radius)
         else:
@@ -372,7 +392,8 @@ def stamped_points(xy, stamps) -> np.ndarray:
     A planner either leaves every stamp the same (Nav2 gives them all the plan's time, or
     zero): the speed profile times the path, (N, 2) of x, y [m]; or stamps each pose with the
     time it is to be reached: (N, 3) of t - t_0, x, y [s, m, m], which
-    :meth:`PathTrajectory.from_points` refuses unless the stamps increase.
+    :meth:`PathTrajectory.from_points` refuses unless the stamps increase and ask for no
+    more than :attr:`PathProfile.v_max`.
 
     Parameters
     ----------
@@ -390,19 +411,21 @@ def stamped_points(xy, stamps) -> np.ndarray:
 
 
 def _where(index: int, xy) -> str:
-    """Return ``point 7 at (3.00, 1.00) m``."""
-    return f'point {index} at ({xy[0]:.2f}, {xy[1]:.2f}) m'
+    """Return ``point 7 at (3.00, 1.00) m`` (``1e+200`` beyond :data:`MAX_COORDINATE`)."""
+    x, y = (f'{v:.2f}' if abs(v) <= MAX_COORDINATE else f'{v:.3g}' for v in xy)
+    return f'point {index} at ({x}, {y}) m'
 
 
-def _checked_points(points):
+def _checked_points(points, v_max: float):
     """
     Return the merged points (M, 2), their stamps (M,) or None, and their input indices.
 
     Raises
     ------
     PathError
-        For an input that is not a list of points, a value that is not a finite number,
-        fewer than 2 distinct points, stamps that do not increase or a cusp.
+        For an input that is not a list of points, a value that is not a finite number or
+        is out of bounds, fewer than 2 distinct points, stamps that do not increase or ask
+        for more than ``v_max`` [m/s], or a cusp.
 
     """
     shape_rule = ('must be a list of points: (N, 2) of x, y [m] or (N, 3) of t, x, y '
@@ -423,6 +446,17 @@ def _checked_points(points):
         what = 'its stamp and coordinates must be' if timed else 'its coordinates must be'
         raise PathError(f'{_where(i, xy_all[i])}: {what} finite numbers', i,
                         tuple(raw[i].tolist()))
+    far = np.flatnonzero((np.abs(xy_all) > MAX_COORDINATE).any(axis=1))
+    if far.size:
+        i = int(far[0])
+        raise PathError(f'{_where(i, xy_all[i])}: a coordinate is beyond +-'
+                        f'{MAX_COORDINATE:g} m, farther than any map reaches (are the units '
+                        'metres?)', i, tuple(raw[i].tolist()))
+    if timed and (raw[:, 0] > MAX_STAMP).any():
+        i = int(np.argmax(raw[:, 0] > MAX_STAMP))
+        raise PathError(f'{_where(i, xy_all[i])}: its stamp {raw[i, 0]:g} s is after '
+                        f'{MAX_STAMP:g} s (32 years); stamps count from the start of the '
+                        'path', i, tuple(raw[i].tolist()))
     kept = []
     for i in range(len(raw)):
         if not kept or math.dist(xy_all[i], xy_all[kept[-1]]) >= MERGE_DISTANCE:
@@ -448,6 +482,7 @@ def _checked_points(points):
             raise PathError(f'{_where(i, xy[k])}: its stamp {stamps[k]:g} s does not come '
                             f'after {previous}; stamps must increase', i,
                             tuple(raw[i].tolist()))
+        _check_speeds(xy, stamps, kept, raw, v_max)
     _, _, turn = _segments(xy)
     cusp = np.flatnonzero(np.abs(turn) > CUSP_ANGLE)
     if cusp.size:
@@ -458,6 +493,33 @@ def _checked_points(points):
                         f'{math.degrees(CUSP_ANGLE):.0f} deg); reversing is not supported',
                         i, tuple(xy[k].tolist()))
     return xy, stamps, index
+
+
+def _check_speeds(xy, stamps, kept, raw, v_max: float) -> None:
+    """
+    Refuse stamps asking for more than ``v_max`` [m/s], or closer than MIN_STAMP_STEP.
+
+    ``xy`` and ``stamps`` are the merged points, ``kept`` their indices in ``raw``.
+    """
+    step = np.diff(stamps)
+    distance = np.hypot(*np.diff(xy, axis=0).T)
+    with np.errstate(over='ignore'):  # v_max of 1e300 m/s: no stamps are too close
+        fast = np.flatnonzero(distance > v_max * step)
+    if fast.size:
+        k = int(fast[0]) + 1
+        i = kept[k]
+        length, seconds = float(distance[k - 1]), float(step[k - 1])
+        raise PathError(f'{_where(i, xy[k])}: the stamps ask for {length / seconds:.3g} m/s '
+                        f'between this point and the one before ({length:.3g} m in '
+                        f"{seconds:.3g} s); the robot's v_max is {v_max:g} m/s", i,
+                        tuple(raw[i].tolist()))
+    close = np.flatnonzero(step < MIN_STAMP_STEP)
+    if close.size:
+        k = int(close[0]) + 1
+        i = kept[k]
+        raise PathError(f'{_where(i, xy[k])}: its stamp comes {step[k - 1]:.3g} s after the '
+                        f"previous point's; stamps must be {MIN_STAMP_STEP:g} s apart at "
+                        'least', i, tuple(raw[i].tolist()))
 
 
 def _segments(xy):

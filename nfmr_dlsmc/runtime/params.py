@@ -15,7 +15,8 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
   (``trajectory.sine.speed``, ``trajectory.circle.radius``, ...); the named one is used;
   ``path``: the points of ``trajectory.path.file``, rounded and timed by
   ``trajectory.path.*`` (:class:`~nfmr_dlsmc.core.path_reference.PathProfile`, its
-  ``omega_max`` the controller's ``limits.omega_max``), and the robot stops at its end
+  ``omega_max`` and ``v_max`` the controller's ``limits.omega_max`` and ``limits.v_max``),
+  and the robot stops at its end
   (:class:`~nfmr_dlsmc.core.arrival.ArrivalConfig`);
 - ``steering.*`` (:class:`~nfmr_dlsmc.core.steering.SteerMode`) and ``geometry.*``
   (:class:`~nfmr_dlsmc.core.steering.RobotGeometry`);
@@ -76,10 +77,11 @@ _PATH_FILE = Param('trajectory.path.file', str, '', '', 'path file (CSV with a h
                    'or t,x,y [s, m, m]; or YAML, a list of [x, y] or [t, x, y]); a relative '
                    "name not found from the working directory is looked up in nfmr's config/",
                    Rule('a path file with trajectory.name path'), read_only=True)
-#: The path's yaw-rate limit is the controller's, not a parameter of its own. Like every
-#: trajectory parameter they are read-only: the reference is built once per activation.
+#: The path's yaw-rate and speed limits are the controller's, not parameters of their own.
+#: Like every trajectory parameter they are read-only: the reference is built once per
+#: activation.
 _PATH_PROFILE = [replace(p, read_only=True) for p in params_of(PathProfile)
-                 if p.name != 'trajectory.path.omega_max']
+                 if p.name not in ('trajectory.path.omega_max', 'trajectory.path.v_max')]
 #: The trajectory classes check their own parameters (:mod:`nfmr_dlsmc.core.trajectories`).
 _BY_TRAJECTORY = Rule('checked by the trajectory')
 
@@ -97,7 +99,7 @@ class ControllerParams:
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     #: How a path's points become a reference: the file's, or one received by the node.
     path_profile: PathProfile = field(default_factory=lambda: PathProfile(
-        omega_max=InputLimits().omega_max))
+        omega_max=InputLimits().omega_max, v_max=InputLimits().v_max))
     #: When a robot following a path has arrived (unused by the analytic references).
     arrival: ArrivalConfig = field(default_factory=ArrivalConfig)
 
@@ -319,7 +321,8 @@ def controller_params(flat: dict) -> ControllerParams:
     if mode.is_crab:
         raise ParameterError('steering.j1', mode.j1, 'must be > -1: the DLSMC steers by yawing, '
                              'which crab mode (j1 = -1) cannot')
-    path_profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max)
+    path_profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max,
+                             v_max=dlsmc.limits.v_max)
     if trajectory_name == PATH:
         reference = _path_reference(flat, path_profile)
     else:
