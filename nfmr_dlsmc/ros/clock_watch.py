@@ -1,7 +1,9 @@
 """
 The launcher's spinning: its nodes (the recorder, the lifecycle client) and /clock.
 
-:class:`ClockWatch` spins them for as long as asked, follows simulated time from
+:class:`ClockWatch` spins them for as long as asked — the lifecycle client's executor first,
+so that the controller's answers are taken at once, not behind the recorder's backlog on a
+busy machine — follows simulated time from
 ``/clock`` whether the run is recorded or not, tells when another ROS source reaches the
 run's topics, and at the end waits for the recorder to take the last messages.
 """
@@ -12,15 +14,33 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 DRAIN_TIMEOUT = 10.0  # [s] wall clock the recorder takes at most for the last messages
+#: Longest wall time [s] the recorder's executor waits before the lifecycle client's looks
+#: for an answer again.
+PRIORITY_PERIOD = 0.005
 
 
 class ClockWatch:
-    """Spins the launcher's nodes and tracks simulated time from /clock (recording or not)."""
+    """
+    Spins the launcher's nodes and tracks simulated time from /clock (recording or not).
 
-    def __init__(self, recorder, executor, node):
+    Parameters
+    ----------
+    recorder : RecorderNode or None
+        The recorder, spun by ``executor``.
+    executor : rclpy executor
+        Spins the recorder and ``node``.
+    node : rclpy.node.Node
+        Takes /clock and looks at the graph.
+    priority : rclpy executor
+        Spins the lifecycle client's node: looked at before each event of ``executor``.
+
+    """
+
+    def __init__(self, recorder, executor, node, priority):
         self.recorder = recorder
         self.executor = executor
         self.node = node
+        self.priority = priority
         self.started = time.monotonic()
         self._clock_ns = 0
         self.backwards = 0  # /clock messages earlier than the one before
@@ -47,7 +67,9 @@ class ClockWatch:
         """Spin the recorder (if any) and the lifecycle client for ``seconds`` [s]."""
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=max(0.0, end - time.monotonic()))
+            self.priority.spin_once(timeout_sec=0.0)
+            self.executor.spin_once(
+                timeout_sec=max(0.0, min(PRIORITY_PERIOD, end - time.monotonic())))
 
     @property
     def sim_time(self) -> float:

@@ -42,6 +42,15 @@ bad parameter then ends it as a user error) and activates when started, so
 ``controller --ros-args --params-file FILE`` runs at once; ``nfmr-run`` starts it with
 ``autostart: false`` and drives the transitions.
 
+Threads: the inputs that make the control steps — ``odom`` and, with ``tick_source:
+sim_clock``, ``/clock`` — and the clock the steps are timed on belong to a hidden node
+``_controller_inputs`` (same namespace, same ``use_sim_time``) spun by an executor of its
+own in the thread ``dlsmc-inputs``; the node itself (lifecycle and parameter services,
+``reference_path_in``, the watchdog, markers, diagnostics) is spun as usual. So a service
+never waits behind a backlog of odometry and ``/clock`` on a machine with no free core:
+doc/nodes.md gives the bound measured. Both share one lock around the session; the order of
+the steps, and so lockstep's determinism, is that one thread's.
+
 Ticks: ``tick_source: odom`` runs one control step per odometry message (lockstep with
 the sim: exactly one command per physics step); ``tick_source: sim_clock`` one per
 ``/clock`` message (lockstep with a sim whose odometry comes at a lower rate, or late: the
@@ -78,7 +87,10 @@ from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import JumpThreshold
 from rclpy.duration import Duration
+from rclpy.experimental import EventsExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -97,6 +109,7 @@ PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
 DIAGNOSTICS_PERIOD = 1.0  # [s] of the node clock: /diagnostics once a second
+INPUT_SPIN_TIMEOUT = 0.1  # [s] wall time the input thread waits at most for its next event
 ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribers' acks
 #: Wall time [s] the telemetry of the last ticks waits on deactivate for its subscribers'
 #: acks: a recorder that fell behind on a busy machine still gets the end of the run.
@@ -116,6 +129,10 @@ def path_answer(msg: Path, topic: str, problem: str | None, summary: str) -> Dia
 
     Parameters
     ----------
+    msg : nav_msgs.msg.Path
+        The path answered: its header stamp and frame and its number of poses identify it.
+    topic : str
+        The topic it came on, the answer's name.
     problem : str or None
         Why the path was refused; None when it was taken.
     summary : str
@@ -190,6 +207,15 @@ class ControllerNode(SchemaLifecycleNode):
             label=','.join(STATE_FIELDS), size=len(STATE_FIELDS), stride=len(STATE_FIELDS))]
         self.failure = None  # what ended the clock loop (tick_source clock), see LoopThread
         self._loop = LoopThread(self._clock_loop, 'dlsmc-1khz', node=self)
+        # The inputs of the control steps, and their clock, on a thread of their own.
+        self._inputs = Node('_controller_inputs', context=self.context,
+                            namespace=self.get_namespace(), start_parameter_services=False,
+                            parameter_overrides=[self.get_parameter('use_sim_time')])
+        self._control_clock = self._inputs.get_clock()
+        self._input_executor = EventsExecutor(context=self.context)
+        self._input_executor.add_node(self._inputs)
+        self._input_thread = LoopThread(self._spin_inputs, 'dlsmc-inputs', node=self)
+        self._input_thread.start()
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._path_status_pub = self.create_publisher(DiagnosticStatus, 'reference_path_status',
                                                       PATH_STATUS_QOS)
@@ -212,8 +238,19 @@ class ControllerNode(SchemaLifecycleNode):
             self.trigger_activate()
 
     def stop(self) -> None:
-        """Stop the clock loop thread (idempotent)."""
+        """Stop the clock loop thread and the input thread (idempotent)."""
         self._loop.stop()
+        self._input_thread.stop()
+
+    def _spin_inputs(self) -> None:
+        """Spin the inputs' node until stopped or the context ends (the input thread)."""
+        while self._input_thread.running.is_set() and self.context.ok():
+            try:
+                self._input_executor.spin_once(timeout_sec=INPUT_SPIN_TIMEOUT)
+            except Exception:
+                if self.context.ok():
+                    raise
+                return  # shutting down: the context went first
 
     # -- lifecycle --------------------------------------------------------------------------
 
@@ -262,20 +299,20 @@ class ControllerNode(SchemaLifecycleNode):
                 self._active = True
             result = super().on_activate(state)  # the lifecycle publishers publish from here
             self._publish_path()
-            self._odom_sub = self.create_subscription(Odometry, 'odom', self._on_odom,
-                                                      COMMAND_QOS)
+            self._odom_sub = self._inputs.create_subscription(Odometry, 'odom', self._on_odom,
+                                                              COMMAND_QOS)
             self._path_sub = self.create_subscription(Path, 'reference_path_in',
                                                       self._on_path, PATH_IN_QOS)
             if values['tick_source'] == 'sim_clock':
                 # After the odometry's subscription: a message of both ready at once is taken
                 # in that order, the odometry of a step before the tick of its /clock.
-                self._clock_sub = self.create_subscription(Clock, '/clock', self._on_clock,
-                                                           COMMAND_QOS)
-            elif values['tick_source'] == 'clock' and self.get_clock().ros_time_is_active:
+                self._clock_sub = self._inputs.create_subscription(Clock, '/clock',
+                                                                   self._on_clock, COMMAND_QOS)
+            elif values['tick_source'] == 'clock' and self._control_clock.ros_time_is_active:
                 # On simulated time: a tick at each control period of /clock, from the
                 # executor; only the latest /clock counts (a late tick is not made up).
                 self._next_tick_ns = None
-                self._clock_jump = self.get_clock().create_jump_callback(
+                self._clock_jump = self._control_clock.create_jump_callback(
                     JumpThreshold(min_forward=Duration(nanoseconds=1),
                                   min_backward=Duration(nanoseconds=-1)),
                     post_callback=self._on_sim_time)
@@ -331,9 +368,10 @@ class ControllerNode(SchemaLifecycleNode):
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 
     def _drop_active_entities(self) -> None:
-        for subscription in (self._odom_sub, self._clock_sub, self._path_sub):
+        for node, subscription in ((self._inputs, self._odom_sub), (self._inputs, self._clock_sub),
+                                   (self, self._path_sub)):
             if subscription is not None:
-                self.destroy_subscription(subscription)
+                node.destroy_subscription(subscription)
         self._odom_sub = self._clock_sub = self._path_sub = None
         if self._clock_jump is not None:
             self._clock_jump.unregister()
@@ -360,6 +398,9 @@ class ControllerNode(SchemaLifecycleNode):
             options = _session_options(candidate)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
+        for p in changes:
+            if p.name == 'use_sim_time':  # the inputs' clock is the control steps' clock
+                self._inputs.set_parameters([Parameter('use_sim_time', value=p.value)])
         with self._lock:
             new_frame = candidate['odom_frame'] != self._values['odom_frame']
             self._values = candidate
@@ -392,7 +433,7 @@ class ControllerNode(SchemaLifecycleNode):
                 sigma)
         if source == 'odom' and accepted:
             self._tick(stamp)
-        elif source == 'clock' and not self.get_clock().ros_time_is_active:
+        elif source == 'clock' and not self._control_clock.ros_time_is_active:
             # On the wall clock beside a sim that may not keep real time (on simulated time
             # both are the sim's: a late message is no other pace).
             ratio = self._clock_rate.observe(stamp, self._now())
@@ -449,7 +490,7 @@ class ControllerNode(SchemaLifecycleNode):
         Behind by more than a period (a busy machine), the next step is a period after this
         one: no burst of steps to catch up. Time going back (a sim reset) starts again.
         """
-        now_ns = self.get_clock().now().nanoseconds
+        now_ns = self._control_clock.now().nanoseconds
         period_ns = round(self.session.params.dlsmc.dt * 1e9)
         due = self._next_tick_ns
         if due is not None and (now_ns < due - period_ns):
@@ -466,7 +507,8 @@ class ControllerNode(SchemaLifecycleNode):
             # Shutting down (e.g. Ctrl-C): the context went first, nothing can be published.
 
     def _now(self) -> float:
-        return self.get_clock().now().nanoseconds * 1e-9
+        """Return the time [s] of the clock the control steps are timed on."""
+        return self._control_clock.now().nanoseconds * 1e-9
 
     def _ages_on_sim_time(self) -> bool:
         """
@@ -478,7 +520,7 @@ class ControllerNode(SchemaLifecycleNode):
         odometry is stale odometry.
         """
         return (self._values['tick_source'] == 'sim_clock'
-                or self.get_clock().ros_time_is_active)
+                or self._control_clock.ros_time_is_active)
 
     def _tick(self, control_time: float) -> None:
         start = time.monotonic()
@@ -509,7 +551,7 @@ class ControllerNode(SchemaLifecycleNode):
         """Return the ``cmd_vel`` message of (v [m/s], omega [rad/s])."""
         if self._values['twist_stamped']:
             msg = TwistStamped()
-            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.header.stamp = self._control_clock.now().to_msg()
             msg.header.frame_id = 'base_link'
             twist = msg.twist
         else:
@@ -629,6 +671,8 @@ class ControllerNode(SchemaLifecycleNode):
                 if self.context.ok():
                     raise
         self.stop()
+        self._input_executor.remove_node(self._inputs)
+        self._inputs.destroy_node()
         return super().destroy_node()
 
 

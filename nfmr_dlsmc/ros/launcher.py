@@ -30,7 +30,7 @@ from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.clock_watch import ClockWatch
-from nfmr_dlsmc.ros.lifecycle_client import ControllerLifecycle, STARTUP_TIMEOUT
+from nfmr_dlsmc.ros.lifecycle_client import ControllerLifecycle, NoAnswer, STARTUP_TIMEOUT
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.node_processes import (
     check_children,
@@ -206,19 +206,23 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         recorder = RecorderNode(writer, RUN_TOPICS, latched=LATCHED_TOPICS,
                                 parameter_overrides=[Parameter('use_sim_time', value=True)])
         executor.add_node(recorder)
-    manager = rclpy.create_node('nfmr_run')  # the controller's lifecycle client
+    manager = rclpy.create_node('nfmr_run')  # /clock and the graph
     executor.add_node(manager)
+    # The controller's lifecycle client on an executor of its own, spun first (ClockWatch).
+    lifecycle = rclpy.create_node('nfmr_run_lifecycle')
+    lifecycle_executor = EventsExecutor()
+    lifecycle_executor.add_node(lifecycle)
     children = []
     status = 0
     real_time_factor = math.nan
-    clock = ClockWatch(recorder, executor, manager)
+    clock = ClockWatch(recorder, executor, manager, lifecycle_executor)
     stop = StopRequest()
     try:
         children = [start_child('sim', 'nfmr_sim.ros.sim_node',
                                 _sim_args(config, options, settings.initial_pose), run_dir),
                     start_child('controller', 'nfmr_dlsmc.ros.controller_node',
                                 _controller_args(config, options, settings.world), run_dir)]
-        controller = ControllerLifecycle(manager, clock, children, stop)
+        controller = ControllerLifecycle(lifecycle, clock, children, stop)
         # The sim starts stepping once the controller subscribes to odometry: when active.
         controller.wait_until_up()
         controller.change('configure')
@@ -230,8 +234,18 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         # stop the controller (zero speed) well within its odometry timeout, so that a run
         # that ended as planned ends without a safety stop.
         clock.spin(0.3)
-        controller.change('deactivate')  # returns once its telemetry is acknowledged
+        try:
+            controller.change('deactivate')  # returns once its telemetry is acknowledged
+        except NoAnswer as exc:
+            # The run has reached its duration and the sim has stopped: what was recorded
+            # is the whole run, so its figures stand; the controller is stopped by signal.
+            print(f'\nnfmr-run: warning: {exc}; the run had reached its duration, so the '
+                  'bag and the figures are complete; the controller is stopped by SIGINT',
+                  file=sys.stderr)
         stop_children(children[1:])
+        print('controller transitions answered in ' + ', '.join(
+            f'{name} {seconds:.3f} s' for name, seconds in controller.answer_times.items()),
+            file=sys.stderr)
     except KeyboardInterrupt:
         status = 130
         print('\ninterrupted: stopping the run', file=sys.stderr)
@@ -253,6 +267,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
             recorder.destroy_node()
         executor.remove_node(manager)
         manager.destroy_node()
+        lifecycle_executor.remove_node(lifecycle)
+        lifecycle.destroy_node()
         rclpy.try_shutdown()
         stop.release()
     if writer is not None and status == 0:

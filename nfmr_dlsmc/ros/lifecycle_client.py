@@ -17,6 +17,10 @@ STARTUP_TIMEOUT = 60.0  # [s] wall clock for both nodes to come up
 TRANSITION_TIMEOUT = 10.0  # [s] wall clock for the controller to answer a transition
 
 
+class NoAnswer(RunError):
+    """The controller did not answer a transition within TRANSITION_TIMEOUT."""
+
+
 class ControllerLifecycle:
     """
     The controller's lifecycle transitions, asked for over its services.
@@ -41,6 +45,8 @@ class ControllerLifecycle:
         self._stop = stop
         self._change = node.create_client(ChangeState, '/controller/change_state')
         self._get = node.create_client(GetState, '/controller/get_state')
+        #: Wall time [s] each transition asked for took to be answered, in order.
+        self.answer_times = {}
 
     def _wait(self, done, timeout: float) -> bool:
         """
@@ -98,16 +104,20 @@ class ControllerLifecycle:
         Raises
         ------
         RunError
-            Naming the transition when it failed, with the controller's log tail, or when
-            no answer came within TRANSITION_TIMEOUT.
+            Naming the transition when it failed, with the controller's log tail.
+        NoAnswer
+            When no answer came within TRANSITION_TIMEOUT.
 
         """
         request = ChangeState.Request()
         request.transition.label = transition
+        start = time.monotonic()
         future = self._change.call_async(request)
         if not self._wait(future.done, TRANSITION_TIMEOUT):
-            raise RunError(f"controller transition '{transition}' got no answer within "
-                           f'{TRANSITION_TIMEOUT:g} s')
+            self._change.remove_pending_request(future)
+            raise NoAnswer(f"the controller did not answer transition '{transition}' within "
+                           f'{TRANSITION_TIMEOUT:g} s (waited {time.monotonic() - start:.1f} s)')
+        self.answer_times[transition] = time.monotonic() - start
         if not future.result().success:
             controller = self._children[1]
             raise RunError(f"controller transition '{transition}' failed; last lines of "

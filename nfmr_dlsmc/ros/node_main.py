@@ -28,6 +28,12 @@ class RosArgumentsError(NfmrError):
 
 #: Longest wait of the spin loop [s]: a signal is acted on within it.
 _SPIN_TIMEOUT = 0.1
+#: Longest time [s] a busy thread of a node holds Python's lock while another waits for it
+#: (Python's default: 5 ms). The executor takes the lock for every message it hands to a
+#: callback; beside a busy loop thread (the sim's steps, the controller's inputs) each take
+#: waited up to the default, so at 1 kHz of messages the executor fell behind for good and
+#: a service waited seconds behind them (doc/nodes.md).
+GIL_SWITCH_INTERVAL = 0.0002
 
 
 def run_node(prog: str, factory, args=None) -> int:
@@ -52,6 +58,7 @@ def run_node(prog: str, factory, args=None) -> int:
 
     """
     stop = StopRequest()
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     try:
         node = _create_node(factory, args)
     except NfmrError as exc:

@@ -13,7 +13,7 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from nav_msgs.msg import Path
-from nfmr_dlsmc.ros.controller_node import PATH_STATUS_QOS, path_stamp
+from nfmr_dlsmc.ros.controller_node import path_stamp, PATH_STATUS_QOS
 from nfmr_dlsmc.ros.node_main import StopRequest
 from nfmr_dlsmc.ros.scene import points_path
 import rclpy
