@@ -93,6 +93,26 @@ def test_a_stalled_sim_stops_the_run_naming_it(tmp_path):
         assert reader.message_count > 0
 
 
+def test_a_controller_that_does_not_answer_deactivate_after_the_run_leaves_it_whole(tmp_path):
+    """The run has reached its duration: a warning naming the node and the wait, exit 0."""
+    run = LoggedRun(tmp_path, '--mode', 'realtime', '--duration', '4', '--no-compare')
+    try:
+        controller = wait_for_child(run.proc, 'nfmr_dlsmc.ros.controller_node')
+        run.wait_for_sim_time(2.0)
+        os.kill(controller, signal.SIGSTOP)  # alive, answering nothing
+        stdout, stderr = run.communicate(timeout=180)
+    finally:
+        run.kill()
+    assert run.returncode == 0, stderr
+    assert re.search(r"nfmr-run: warning: the controller did not answer transition "
+                     r"'deactivate' within 10 s \(waited 1\d\.\d s\); the run had reached "
+                     r'its duration', stderr), stderr
+    assert 'IAE of distance' in stdout  # the report of the whole run
+    assert gone(controller)
+    with Reader(Path(stdout.strip().splitlines()[-1])) as reader:
+        assert reader.message_count > 0
+
+
 def test_sigterm_stops_every_child_within_5_s_and_finishes_the_bag(tmp_path):
     run = LoggedRun(tmp_path, '--duration', '60')
     try:
