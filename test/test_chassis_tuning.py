@@ -12,7 +12,9 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 
+from nfmr_dlsmc.analysis import chassis_tuning
 from nfmr_dlsmc.analysis.chassis_search_space import DEFAULT_SPACE
 from nfmr_dlsmc.cli import tune as tune_cli
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
@@ -176,6 +178,69 @@ def test_a_diverging_trial_is_stopped_and_pruned(tmp_path):
     assert not out.exists()
     (trial,) = finished(tmp_path / 'study.db', 'slow')
     assert trial.state == TrialState.PRUNED
+
+
+def test_two_commands_on_one_study_with_the_same_seed_never_draw_the_same_trial(
+        tmp_path, monkeypatch):
+    # Two commands started together on one study (two machines joining it with the same
+    # command), as two threads: each one's first trial is under way before the other draws
+    # (a barrier in a stand-in objective that draws the values and runs nothing). Seeded
+    # with the seed and the trials the study had when they started, both drew the same.
+    setup = chassis_tuning.TuningSetup(
+        robot_file(tmp_path), 'good', DEFAULT_SPACE,
+        chassis_tuning.make_scenarios(0, (1.0, 1.0, 0.5), 0), 4.0, 3.0)
+    url = f"sqlite:///{tmp_path / 'study.db'}"
+    chassis_tuning.open_study(url, 'shared', chassis_tuning.load_tuning(setup), False)
+    both_under_way = threading.Barrier(2, timeout=60)
+    first_trial = threading.local()
+
+    def stand_in(trial, tuning):
+        for dimension in tuning.setup.space:
+            dimension.suggest(trial)
+        if not getattr(first_trial, 'done', False):
+            first_trial.done = True
+            both_under_way.wait()
+        return 1.0
+
+    monkeypatch.setattr(chassis_tuning, '_objective', stand_in)
+    failures = []
+
+    def command():
+        try:
+            chassis_tuning.run_study(setup, url, 'shared', 6, None, 0, 1, lambda text: None)
+        except BaseException as exc:  # noqa: B902 - reported by the test
+            failures.append(exc)
+
+    threads = [threading.Thread(target=command) for _ in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    assert not failures and not any(t.is_alive() for t in threads), failures
+    trials = optuna.load_study(study_name='shared', storage=url).get_trials()
+    drawn = [tuple(sorted(t.params.items())) for t in trials
+             if not chassis_tuning.is_untuned(t)]
+    assert len(drawn) >= 5
+    assert len(set(drawn)) == len(drawn), [t.number for t in trials]
+
+
+def test_one_command_draws_the_same_study_again_from_the_same_seed(tmp_path, monkeypatch):
+    setup = chassis_tuning.TuningSetup(
+        robot_file(tmp_path), 'good', DEFAULT_SPACE,
+        chassis_tuning.make_scenarios(0, (1.0, 1.0, 0.5), 0), 4.0, 3.0)
+    tuning = chassis_tuning.load_tuning(setup)
+    monkeypatch.setattr(chassis_tuning, '_objective', lambda trial, tuning: sum(
+        value for value in (d.suggest(trial) for d in tuning.setup.space)
+        if isinstance(value, float)))
+    studies = []
+    for name in ('first', 'again'):
+        url = f'sqlite:///{tmp_path / name}.db'
+        chassis_tuning.open_study(url, name, tuning, False)
+        chassis_tuning.run_study(setup, url, name, 14, None, 3, 1, lambda text: None)
+        studies.append([t.params for t in optuna.load_study(study_name=name,
+                                                            storage=url).get_trials()])
+    # Past the 10 random start-up trials too: TPE's own draws.
+    assert len(studies[0]) == 14 and studies[0] == studies[1]
 
 
 @pytest.mark.parametrize('args, message', [

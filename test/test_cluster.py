@@ -3,11 +3,14 @@ The sweeps on a real Dask cluster: a scheduler and two workers started as proces
 
 ``nfmr-montecarlo --scheduler`` gives the summary of a local run, bit for bit, even when a
 worker is killed in the middle (Dask runs its runs again on the other) and says that it
-left; an address nobody answers at is one line and exit 2.
+left; without a worker it says so once and waits for one; a scheduler killed in the middle
+is one line and exit 1, the runs finished before it kept; an address nobody answers at is
+one line and exit 2.
 """
 
 import json
 from pathlib import Path
+import re
 import signal
 import subprocess
 import sys
@@ -26,12 +29,71 @@ MONTECARLO = [str(BIN / 'nfmr-montecarlo'), '--params', str(CONFIG / 'robot_case
               '--n', '8', '--duration', '100', '--json']
 
 
+def _montecarlo(n: int) -> list[str]:
+    """Return MONTECARLO's command with ``n`` starts."""
+    return [str(BIN / 'nfmr-montecarlo'), '--params', str(CONFIG / 'robot_case1.yaml'),
+            '--n', str(n), '--duration', '100', '--json']
+
+
+class Background:
+    """A command run in the background, its stdout and stderr read as they come."""
+
+    def __init__(self, args):
+        self.process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        text=True)
+        self._out, self._err = [], []
+        self._readers = [threading.Thread(target=self._read, args=(pipe, chunks), daemon=True)
+                         for pipe, chunks in ((self.process.stdout, self._out),
+                                              (self.process.stderr, self._err))]
+        for reader in self._readers:
+            reader.start()
+
+    @staticmethod
+    def _read(pipe, chunks) -> None:
+        for chunk in iter(lambda: pipe.read(1), ''):
+            chunks.append(chunk)
+
+    @property
+    def stderr(self) -> str:
+        """Return what the command has written on stderr so far."""
+        return ''.join(self._err)
+
+    def finish(self, timeout: float) -> tuple[int, str, str]:
+        """Wait for the command's end; return its exit status, stdout and stderr."""
+        status = self.process.wait(timeout=timeout)
+        for reader in self._readers:
+            reader.join(timeout=10)
+        return status, ''.join(self._out), self.stderr
+
+
+def _lines(stderr: str) -> list[str]:
+    """Return the lines of stderr but the progress lines (``[  k/n] ...``)."""
+    return [line for line in stderr.replace('\r', '\n').splitlines()
+            if line.strip() and not line.startswith('[')]
+
+
 def _wait_for(condition, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
             raise AssertionError(f'timed out waiting for {what}')
         time.sleep(0.05)
+
+
+class LocalCluster:
+    """The scheduler and workers of :func:`cluster`: their processes and a way to add one."""
+
+    def __init__(self, start):
+        self._start = start
+        self.address = self.scheduler = None
+        self.workers = []
+
+    def add_worker(self) -> subprocess.Popen:
+        """Start one more single-thread worker without a nanny."""
+        self.workers.append(self._start('worker', self.address, '--nthreads', '1',
+                                        '--no-nanny', '--no-dashboard', '--host',
+                                        '127.0.0.1'))
+        return self.workers[-1]
 
 
 @pytest.fixture
@@ -48,18 +110,19 @@ def cluster(tmp_path):
                                           stderr=subprocess.STDOUT, cwd=tmp_path))
         return processes[-1]
 
-    start('scheduler', '--host', '127.0.0.1', '--port', '0', '--no-dashboard',
-          '--scheduler-file', str(scheduler_file))
+    local = LocalCluster(start)
+    local.scheduler = start('scheduler', '--host', '127.0.0.1', '--port', '0',
+                            '--no-dashboard', '--scheduler-file', str(scheduler_file))
     try:
         _wait_for(lambda: scheduler_file.is_file() and scheduler_file.stat().st_size > 0,
                   60, 'the scheduler file')
-        address = json.loads(scheduler_file.read_text())['address']
-        workers = [start('worker', address, '--nthreads', '1', '--no-nanny', '--no-dashboard',
-                         '--host', '127.0.0.1') for _ in range(2)]
+        local.address = json.loads(scheduler_file.read_text())['address']
+        for _ in range(2):
+            local.add_worker()
         from distributed import Client
-        with Client(address, timeout=30, set_as_default=False) as client:
+        with Client(local.address, timeout=30, set_as_default=False) as client:
             client.wait_for_workers(2, timeout=60)
-        yield address, workers
+        yield local
     finally:
         for process in processes[1:]:  # the workers hold nothing to save
             process.kill()
@@ -74,9 +137,10 @@ def cluster(tmp_path):
             log.close()
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_run_leaves_the_summary_complete_and_equal_to_a_local_run(
         cluster):
-    address, workers = cluster
+    address, workers = cluster.address, cluster.workers
     remote = subprocess.Popen([*MONTECARLO, '--scheduler', address], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True)
     progress = []
@@ -108,8 +172,100 @@ def test_a_worker_killed_mid_run_leaves_the_summary_complete_and_equal_to_a_loca
     assert remote_summary == local_summary
 
 
+def test_a_scheduler_killed_mid_run_is_one_line_and_exit_1_and_the_finished_runs_are_kept(
+        cluster):
+    command = Background([*_montecarlo(40), '--scheduler', cluster.address])
+    _wait_for(lambda: '[  2/40]' in command.stderr, 300, 'two starts done on the cluster')
+    cluster.scheduler.kill()
+    killed = time.monotonic()
+    status, stdout, stderr = command.finish(timeout=120)
+    assert time.monotonic() - killed < 30  # about 1 s here
+    assert status == 1, stderr[-2000:]
+    header, line = _lines(stderr)
+    assert header.startswith('40 starts, 100 s each')
+    found = re.fullmatch(
+        f'nfmr-montecarlo: error: the Dask scheduler at {re.escape(cluster.address)} is gone '
+        r'\(the connection to it was lost\): (\d+) of 40 runs had finished; the summary '
+        r'printed is of those \1 \(partial, "complete": false\)', line)
+    assert found, line
+    finished = int(found[1])
+    # The summary is of the runs the progress line counted, and only of them.
+    assert f'[{finished:>3}/40]' in stderr and f'[{finished + 1:>3}/40]' not in stderr
+    summary = json.loads(stdout.strip().splitlines()[-1])
+    assert (summary['complete'], summary['runs_finished'], summary['runs_asked'],
+            summary['n'], len(summary['runs'])) == (False, finished, 40, finished, finished)
+
+
+@pytest.mark.slow
+def test_a_cluster_left_without_workers_says_so_once_and_goes_on_when_one_joins(cluster):
+    command = Background([*_montecarlo(4), '--scheduler', cluster.address])
+    _wait_for(lambda: '[  2/4]' in command.stderr, 300, 'two starts done on the cluster')
+    for worker in cluster.workers:
+        worker.kill()
+    notice = (f'no Dask worker is connected to {cluster.address}; waiting for one (Ctrl-C '
+              'to stop)')
+    _wait_for(lambda: notice in command.stderr, 60, 'the line saying so')
+    cluster.add_worker()
+    status, stdout, stderr = command.finish(timeout=300)
+    assert status == 0, stderr[-2000:]
+    assert _lines(stderr).count(notice) == 1
+    summary = json.loads(stdout.strip().splitlines()[-1])
+    assert summary['n'] == 4 and 'complete' not in summary
+    assert len(summary['cluster']['workers_departed']) == 2
+
+
+def test_nfmr_compare_keeps_the_results_of_the_runs_a_killed_scheduler_finished(
+        cluster, tmp_path):
+    out = tmp_path / 'report'
+    command = Background([str(BIN / 'nfmr-compare'), '--duration', '100', '--controllers',
+                          'pid', '--out', str(out), '--scheduler', cluster.address])
+    _wait_for(lambda: re.search(r'\[  2/ *\d+\]', command.stderr), 300,
+              'two runs done on the cluster')
+    cluster.scheduler.kill()
+    status, _, stderr = command.finish(timeout=120)
+    assert status == 1, stderr[-2000:]
+    line = _lines(stderr)[-1]
+    found = re.fullmatch(
+        f'nfmr-compare: error: the Dask scheduler at {re.escape(cluster.address)} is gone '
+        r'\(the connection to it was lost\): (\d+) of (\d+) runs had finished; '
+        f'{re.escape(str(out))}/results.json holds those ' r'\1 \(partial, "complete": '
+        r'false; no report\)', line)
+    assert found, line
+    finished, asked = int(found[1]), int(found[2])
+    results = json.loads((out / 'results.json').read_text())
+    assert (results['complete'], results['runs_finished'], results['runs_asked']) == (
+        False, finished, asked)
+    runs = [run for case in results.values() if isinstance(case, dict)
+            for start in case.values() for run in start.values()]
+    assert 2 <= len(runs) == finished < asked
+    assert not (out / 'report.md').exists()
+
+
+@pytest.mark.sim
+def test_nfmr_tune_keeps_its_study_when_the_scheduler_is_killed(cluster, tmp_path):
+    from test_chassis_tuning import narrow_flags, robot_file, SHORT
+
+    out = tmp_path / 'tuned.yaml'
+    command = Background([str(BIN / 'nfmr-tune'), *SHORT, '--params', str(robot_file(tmp_path)),
+                          '--trials', '20', '--out', str(out), narrow_flags(tmp_path),
+                          '--scheduler', cluster.address])
+    # The untuned trial runs here first, then the workers take the study.
+    _wait_for(lambda: 'trial 1/20' in command.stderr, 300, 'the first trial')
+    cluster.scheduler.kill()
+    status, _, stderr = command.finish(timeout=120)
+    assert status == 1, stderr[-2000:]
+    found = re.fullmatch(
+        f'nfmr-tune: error: the Dask scheduler at {re.escape(cluster.address)} is gone '
+        r'\(the connection to it was lost\): (\d+) of 20 trials had finished; study tuned '
+        f'in {re.escape(f"sqlite:///{tmp_path}/study.db")} keeps them; the same command '
+        'resumes it', stderr.splitlines()[-1])
+    assert found, stderr[-2000:]
+    assert int(found[1]) >= 1 and not out.exists()
+
+
+@pytest.mark.slow
 def test_nfmr_compare_on_the_cluster_writes_the_results_of_a_local_run(cluster, tmp_path):
-    address, _ = cluster
+    address = cluster.address
     results = []
     for where, out in ((['--scheduler', address], 'remote'), (['--jobs', '2'], 'local')):
         proc = subprocess.run([str(BIN / 'nfmr-compare'), '--duration', '3', '--controllers',
@@ -127,7 +283,7 @@ def test_sigterm_cancels_the_commands_runs_on_the_cluster(cluster):
     # As Ctrl-C: the command ends as interrupted and the runs it queued leave the cluster.
     from distributed import Client
 
-    address, _ = cluster
+    address = cluster.address
     remote = subprocess.Popen([*MONTECARLO, '--scheduler', address], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True)
     with Client(address, timeout=30, set_as_default=False) as client:
@@ -141,6 +297,7 @@ def test_sigterm_cancels_the_commands_runs_on_the_cluster(cluster):
         _wait_for(lambda: not client.who_has(), 60, 'the cluster to forget the runs')
 
 
+@pytest.mark.slow
 def test_a_scheduler_that_does_not_answer_is_one_line_and_exit_2(tmp_path):
     # A port on this host nobody listens at: refused, retried until the connect timeout.
     begin = time.monotonic()

@@ -5,6 +5,7 @@ Shipped files are never overwritten unless asked; Ctrl-C and SIGTERM end a comma
 once with exit 130 and no traceback.
 """
 
+import importlib
 import os
 from pathlib import Path
 import signal
@@ -26,18 +27,74 @@ def run(*args, timeout=60):
                           timeout=timeout, cwd=ROOT)
 
 
-@pytest.mark.parametrize('command, args', [
-    ('nfmr-compare', ['--out', '/proc/nfmr-report']),
-    ('nfmr-montecarlo', ['--n', '2', '--plots', '/proc/nfmr-plots']),
-    ('nfmr-tune', ['--candidates', '2', '--out', '/proc/nfmr/tuned.yaml']),
-    ('nfmr-tune-baselines', ['--budget', '1', '--out', '/proc/nfmr/comparison.yaml']),
-])
-def test_an_unwritable_output_is_refused_before_any_work(command, args):
+#: Every output argument of every command: (command module, arguments before it, option,
+#: 'folder' or the suffix of the file it names). The bags given do not exist: the outputs
+#: are checked before any bag is read.
+OUTPUTS = [
+    ('analyze', ['nobag'], '--plots', 'folder'),
+    ('analyze', ['nobag'], '--animate', '.gif'),
+    ('bench', [], '--json', '.json'),
+    ('compare', ['--duration', '1', '--controllers', 'pid'], '--out', 'folder'),
+    ('montecarlo', ['--n', '2', '--duration', '1'], '--plots', 'folder'),
+    ('run', ['--duration', '1'], '--out', 'folder'),
+    ('tune', ['--candidates', '2'], '--out', '.yaml'),
+    ('tune', ['--plant', 'pybullet', '--trials', '1'], '--out', '.yaml'),
+    ('tune_baselines', ['--budget', '1'], '--out', '.yaml'),
+]
+
+
+def _output_cases():
+    """Yield each output of OUTPUTS three ways wrong: the other kind, under a file, /proc."""
+    for module, args, option, kind in OUTPUTS:
+        other = 'a file for a folder' if kind == 'folder' else 'a folder for a file'
+        for wrong in (other, 'under a file', 'unwritable'):
+            yield pytest.param(module, args, option, kind, wrong,
+                               id=f'{module} {args[:2]} {option} {wrong}',
+                               marks=[pytest.mark.ros] if module == 'run' else [])
+
+
+def _wrong_output(wrong: str, folder: Path, suffix: str) -> tuple[Path, str]:
+    """Make ``wrong`` in ``folder``; return the argument and the end of the one line."""
+    if wrong == 'a folder for a file':
+        (folder / f'taken{suffix}').mkdir()
+        return folder / f'taken{suffix}', 'is a directory, expected a file'
+    if wrong == 'a file for a folder':
+        (folder / 'taken').write_text('')
+        return folder / 'taken', 'is a file, expected a folder'
+    if wrong == 'under a file':
+        (folder / 'file').write_text('')
+        return folder / 'file' / f'out{suffix}', f'{folder}/file is a file, not a folder'
+    return Path(f'/proc/nfmr/out{suffix}'), 'not writable (No such file or directory)'
+
+
+@pytest.mark.sim  # named, not stepped: the tuning on the chassis is refused before
+@pytest.mark.parametrize('module, args, option, kind, wrong', list(_output_cases()))
+def test_an_output_that_cannot_be_written_is_refused_before_any_work(
+        tmp_path, monkeypatch, capsys, module, args, option, kind, wrong):
+    monkeypatch.chdir(tmp_path)
+    value, why = _wrong_output(wrong, tmp_path, '' if kind == 'folder' else kind)
+    before = sorted(tmp_path.rglob('*'))
+    command = importlib.import_module(f'nfmr_dlsmc.cli.{module}')
     start = time.monotonic()
-    proc = run(command, *args)
-    assert proc.returncode == 2 and 'not writable' in proc.stderr, proc.stderr
-    assert len(proc.stderr.strip().splitlines()) == 1
+    status = command.main([*args, option, str(value)])
     assert time.monotonic() - start < 10.0  # nothing was computed
+    out, err = capsys.readouterr()
+    prog = 'nfmr-' + module.replace('_', '-')
+    assert (status, out, err) == (2, '', f'{prog}: error: {option} {value}: {why}\n')
+    assert sorted(tmp_path.rglob('*')) == before  # nothing written
+
+
+@pytest.mark.sim  # named, not stepped: refused before
+def test_the_plots_beside_a_tuned_file_are_checked_with_it(tmp_path, capsys):
+    from nfmr_dlsmc.cli import tune
+
+    (tmp_path / 'tuned_history.png').mkdir()
+    out = tmp_path / 'tuned.yaml'
+    assert tune.main(['--plant', 'pybullet', '--trials', '1', '--out', str(out)]) == 2
+    assert capsys.readouterr().err == (
+        f'nfmr-tune: error: --out {out}: its plot {tmp_path}/tuned_history.png: is a '
+        'directory, expected a file\n')
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['tuned_history.png']
 
 
 @pytest.mark.parametrize('command, shipped', [('nfmr-tune', 'config/tuned_outer.yaml'),

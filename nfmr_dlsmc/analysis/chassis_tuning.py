@@ -17,9 +17,11 @@ the pybullet chassis of the same file's ``sim`` section, with its sensing, in th
 
 The study lives in an Optuna RDB storage (``sqlite:///...`` or any SQLAlchemy URL): each
 finished trial is stored when it ends, so an interrupted study resumes with them, and
-several processes or machines may work on one study. The study records what it was made
-for (:meth:`Tuning.identity`): the chassis, the odometry, the scenarios and the objective;
-continuing it for another is refused unless forced.
+several processes or machines may work on one study: each trial's values are drawn with
+the seed and the trial's number in the study (:class:`TrialSeededSampler`), so that they
+never draw the same. The study records what it was made for (:meth:`Tuning.identity`):
+the chassis, the odometry, the scenarios and the objective; continuing it for another is
+refused unless forced.
 """
 
 from concurrent.futures import wait
@@ -39,16 +41,21 @@ from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
-from nfmr_dlsmc.runtime.worker_pool import Cluster, worker_pool
+from nfmr_dlsmc.runtime.worker_pool import (
+    Cluster,
+    SchedulerLost,
+    WORKER_CHECK_PERIOD,
+    worker_pool,
+)
 import numpy as np
 import optuna
 from optuna.trial import TrialState
 import sqlalchemy.exc
 
 __all__ = ['DivergenceWatch', 'Diverged', 'FIGURES', 'OBJECTIVE_TERMS',
-           'RANDOM_START_TRAJECTORIES', 'RUNAWAY_MARGIN', 'StudyError', 'Tuning', 'TuningSetup',
-           'is_feasible', 'is_untuned', 'load_tuning', 'make_scenarios', 'objective_value',
-           'open_study', 'run_study', 'study_report']
+           'RANDOM_START_TRAJECTORIES', 'RUNAWAY_MARGIN', 'StudyError', 'TrialSeededSampler',
+           'Tuning', 'TuningSetup', 'is_feasible', 'is_untuned', 'load_tuning',
+           'make_scenarios', 'objective_value', 'open_study', 'run_study', 'study_report']
 
 #: The objective's terms: (figure, scale). A scenario scores sum(figure / scale), each
 #: figure weighted by the inverse of its scale: the return time to 1 cm [s] against 10 s,
@@ -460,6 +467,54 @@ def open_study(url: str, name: str, tuning: Tuning, force: bool):
     return study
 
 
+class TrialSeededSampler(optuna.samplers.BaseSampler):
+    """
+    Optuna's multivariate TPE, drawing each trial's values with the seed and its number.
+
+    The storage gives every trial of a study its own number, so processes and machines
+    working on one study with the same seed never draw the same values (samplers seeded
+    alike did: two processes started together drew the same start-up trials), and a
+    resumed study draws new ones; a study run by one process is reproducible from the
+    seed. Before each trial a new TPE sampler is made, seeded from (seed, trial number);
+    it answers for the trial.
+
+    Parameters
+    ----------
+    seed : int
+        ``--seed``.
+
+    """
+
+    def __init__(self, seed: int):
+        self._seed = seed
+        self._tpe = self._sampler(0)
+
+    def _sampler(self, number: int) -> optuna.samplers.TPESampler:
+        state = np.random.SeedSequence([self._seed, number]).generate_state(1)[0]
+        return optuna.samplers.TPESampler(seed=int(state), multivariate=True)
+
+    def before_trial(self, study, trial) -> None:
+        """Take the sampler of this trial's number."""
+        self._tpe = self._sampler(trial.number)
+        self._tpe.before_trial(study, trial)
+
+    def infer_relative_search_space(self, study, trial) -> dict:
+        """Return TPE's joint search space."""
+        return self._tpe.infer_relative_search_space(study, trial)
+
+    def sample_relative(self, study, trial, search_space) -> dict:
+        """Return TPE's joint draw."""
+        return self._tpe.sample_relative(study, trial, search_space)
+
+    def sample_independent(self, study, trial, param_name, param_distribution):
+        """Return TPE's draw of one parameter."""
+        return self._tpe.sample_independent(study, trial, param_name, param_distribution)
+
+    def after_trial(self, study, trial, state, values) -> None:
+        """Let TPE see the trial's end."""
+        self._tpe.after_trial(study, trial, state, values)
+
+
 def _finished(study) -> int:
     """Return how many trials of ``study`` have ended, completed or pruned."""
     return len(study.get_trials(deepcopy=False,
@@ -503,8 +558,8 @@ def _optimize(setup: TuningSetup, url: str, name: str, trials: int, timeout, see
     ``at_most``: run no more trials than that here.
     """
     tuning = load_tuning(setup)
-    study = optuna.load_study(study_name=name, storage=_storage(url), sampler=(
-        optuna.samplers.TPESampler(seed=seed, multivariate=True)))
+    study = optuna.load_study(study_name=name, storage=_storage(url),
+                              sampler=TrialSeededSampler(seed))
     left = trials - _finished(study)
     if at_most is not None:
         left = min(left, at_most)
@@ -538,8 +593,10 @@ def run_study(setup: TuningSetup, url: str, name: str, trials: int, timeout, see
     timeout : float or None
         Stop starting trials after this long [s].
     seed : int
-        Of the sampler; each process draws with ``seed`` + the trials in the study when it
-        starts + its index, so that a resumed study does not draw its first values again.
+        Of the sampler (:class:`TrialSeededSampler`): each trial's values are drawn with
+        ``seed`` and the trial's number, so that the processes (and other commands) working
+        on the study never draw the same values, and one process alone draws the same
+        study again from the same seed.
     jobs : int or Cluster
         Processes working on the study (1: this one), or a Dask cluster: one worker per
         thread of it, each reaching the storage at ``url`` (a database, or a file every
@@ -548,31 +605,41 @@ def run_study(setup: TuningSetup, url: str, name: str, trials: int, timeout, see
     log : callable
         ``log(text)``: one line after each trial.
 
+    Raises
+    ------
+    SchedulerLost
+        The cluster's scheduler went away; the study keeps the trials that had finished.
+
     """
     study = optuna.load_study(study_name=name, storage=_storage(url))
-    base = seed + len(study.trials)
     cluster = isinstance(jobs, Cluster)
     processes = jobs.jobs if cluster else jobs
     if processes == 1 and not cluster:
-        _optimize(setup, url, name, trials, timeout, base, 1, log)
+        _optimize(setup, url, name, trials, timeout, seed, 1, log)
         return
     # The enqueued trials here first: SQLite cannot lock the row of a waiting trial, and
     # two processes asking at once could both take it.
     waiting = len(study.get_trials(deepcopy=False, states=(TrialState.WAITING,)))
     if waiting:
         begin = time.monotonic()
-        _optimize(setup, url, name, trials, timeout, base, 1, log, at_most=waiting)
+        _optimize(setup, url, name, trials, timeout, seed, 1, log, at_most=waiting)
         if timeout is not None:
             timeout = max(timeout - (time.monotonic() - begin), 1e-3)
     with worker_pool(jobs, quiet=True) as pool:
-        pending = {pool.submit(_work, setup, url, name, trials, timeout, base + 1000 * i,
-                               processes) for i in range(processes)}
+        pending = {pool.submit(_work, setup, url, name, trials, timeout, seed, processes)
+                   for _ in range(processes)}
+        reported = time.monotonic()
         while pending:
-            done, pending = wait(pending, timeout=CLUSTER_REPORT_PERIOD)
+            done, pending = wait(pending, timeout=WORKER_CHECK_PERIOD)
+            if cluster and jobs.watch(done):
+                lost = SchedulerLost(jobs.address, _finished(study), trials, 'trials')
+                lost.kept = f'study {name} in {url} keeps them; the same command resumes it'
+                raise lost
             for future in done:
                 future.result()
-            if cluster and pending:
+            if cluster and pending and time.monotonic() - reported >= CLUSTER_REPORT_PERIOD:
                 log(f'{_finished(study)}/{trials} trials finished on {jobs.address}')
+                reported = time.monotonic()
 
 
 def _work(setup, url, name, trials, timeout, seed, jobs) -> None:

@@ -4,7 +4,6 @@ The runs of the comparison (``nfmr-compare``): every controller on every scenari
 They are spread over worker processes; each gives its metrics and its decimated series.
 """
 
-from concurrent.futures import as_completed
 from dataclasses import replace
 
 from nfmr_dlsmc.analysis.comparison_metrics import run_metrics
@@ -19,7 +18,7 @@ from nfmr_dlsmc.core.disturbances import YawRateDisturbance
 from nfmr_dlsmc.core.gains import InputLimits
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.runtime.params import load_gain_blocks
-from nfmr_dlsmc.runtime.worker_pool import worker_pool
+from nfmr_dlsmc.runtime.worker_pool import finished, SchedulerLost, worker_pool
 import numpy as np
 
 #: Samples per plotted point (10 ms at the 1 ms period); omega is kept as the min / max
@@ -85,21 +84,27 @@ def path_tasks(names, blocks: dict, trajectory, arrival, duration: float,
              sensing) for name in names]
 
 
-def run_all(tasks, jobs: int, progress=None) -> tuple[dict, dict]:
+def run_all(tasks, jobs, progress=None) -> tuple[dict, dict]:
     """
-    Run ``tasks`` on ``jobs`` processes (their stdout silenced).
+    Run ``tasks`` on ``jobs`` processes (their stdout silenced), or a Dask cluster.
 
     Returns the metrics and the decimated series of each run, keyed by task key;
-    ``progress(done, total, key)`` follows each finished run.
+    ``progress(done, total, key)`` follows each finished run. When the cluster's scheduler
+    goes away, the :class:`~nfmr_dlsmc.runtime.worker_pool.SchedulerLost` raised holds as
+    ``partial`` the metrics and series of the runs that had ended, returned so.
     """
     metrics, series = {}, {}
     with worker_pool(jobs, quiet=True) as pool:
         futures = [pool.submit(_run_task, task) for task in tasks]
-        for done, future in enumerate(as_completed(futures), 1):
-            key, run_metrics_, run_series = future.result()
-            metrics[key], series[key] = run_metrics_, run_series
-            if progress:
-                progress(done, len(tasks), key)
+        try:
+            for done, future in enumerate(finished(futures, jobs), 1):
+                key, run_metrics_, run_series = future.result()
+                metrics[key], series[key] = run_metrics_, run_series
+                if progress:
+                    progress(done, len(tasks), key)
+        except SchedulerLost as lost:
+            lost.partial = (metrics, series)
+            raise
     return metrics, series
 
 

@@ -16,7 +16,6 @@ per start: the batch simulator has no arrival rule) success is arriving at its e
 (:mod:`nfmr_dlsmc.core.arrival`), on either plant.
 """
 
-from concurrent.futures import as_completed
 import math
 from pathlib import Path
 
@@ -28,7 +27,7 @@ from nfmr_dlsmc.plants.batch import simulate_batch_parallel
 from nfmr_dlsmc.plants.kinematic import simulate
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import ControllerParams
-from nfmr_dlsmc.runtime.worker_pool import worker_pool
+from nfmr_dlsmc.runtime.worker_pool import finished, SchedulerLost, worker_pool
 import numpy as np
 
 #: Per-start figures: convergence times (1 mm, 1 cm) [s], IAE of the distance [m*s], final
@@ -76,8 +75,8 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
         Added to the commanded yaw rate.
     hold_last : float
         The hold window at the end of each run [s] (the whole run if it is shorter).
-    jobs : int
-        Processes.
+    jobs : int or Cluster
+        Processes, or a Dask cluster (one run per start only).
     progress : callable
         ``progress(done, total, x0, figures)`` after each start run alone (not called by
         the batch simulator).
@@ -88,6 +87,12 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
         Figure -> array in the order of ``starts``: those of :data:`RUN_KEYS` (NaN where
         undefined), along a path :data:`PATH_RUN_KEYS`; the batch simulator gives
         ``t_conv``, ``iae`` and ``final_distance``.
+
+    Raises
+    ------
+    SchedulerLost
+        The cluster's scheduler went away; its ``partial`` holds the runs that had ended:
+        (indices into ``starts``, their figures as returned here), or None if none had.
 
     """
     if uses_batch(plant, params.dlsmc, params.trajectory):
@@ -101,10 +106,21 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     rows = [None] * len(tasks)
     with worker_pool(jobs, quiet=True) as pool:
         futures = {pool.submit(_run_start, task): k for k, task in enumerate(tasks)}
-        for done, future in enumerate(as_completed(futures), 1):
-            k = futures[future]
-            rows[k] = future.result()
-            progress(done, len(tasks), tasks[k][0], rows[k])
+        try:
+            for done, future in enumerate(finished(futures, jobs), 1):
+                k = futures[future]
+                rows[k] = future.result()
+                progress(done, len(tasks), tasks[k][0], rows[k])
+        except SchedulerLost as lost:
+            kept = [k for k, row in enumerate(rows) if row is not None]
+            if kept:
+                lost.partial = (np.array(kept), _columns([rows[k] for k in kept]))
+            raise
+    return _columns(rows)
+
+
+def _columns(rows: list) -> dict:
+    """Return the figure -> array of per-start figure dicts."""
     return {key: np.array([row[key] for row in rows]) for key in rows[0]}
 
 

@@ -88,6 +88,8 @@ def _run(args) -> int:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate is None and (args.animate_speed, args.animate_fps) != (None, None):
         raise UsageError('--animate-speed and --animate-fps need --animate')
+    if args.plots:
+        check_writable(args.plots, '--plots', directory=True)
     if args.animate is not None:
         if len(args.bags) != 1:
             raise UsageError(f'--animate draws one bag; got {len(args.bags)}')

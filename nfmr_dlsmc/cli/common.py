@@ -3,9 +3,10 @@ What every command line shares: the one ``main`` wrapper, argument types and che
 
 :func:`run_command` runs each ``nfmr-*`` command. A user error, a bad argument included
 (:class:`UsageError`), is an :class:`~nfmr_dlsmc.core.errors.NfmrError`: it ends there as
-one line ``<prog>: error: <message>`` and exit status 2. A closed stdout ends the command
-quietly, Ctrl-C and SIGTERM with one line and exit status 130. Also strict JSON and output
-paths checked before the long work starts.
+one line ``<prog>: error: <message>`` and exit status 2. A Dask scheduler lost in the
+middle of the runs is one such line too, with exit status 1 (the runs started and could not
+all end). A closed stdout ends the command quietly, Ctrl-C and SIGTERM with one line and
+exit status 130. Also strict JSON and output paths checked before the long work starts.
 """
 
 import argparse
@@ -20,7 +21,7 @@ from nfmr_dlsmc.cli.entry import INTERRUPTED_STATUS, take_signals
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
-from nfmr_dlsmc.runtime.worker_pool import Cluster
+from nfmr_dlsmc.runtime.worker_pool import Cluster, SchedulerLost
 
 #: Memory one recorded simulated step takes (the row of a run and its arrays, ~0.7 kB
 #: measured; rounded up) [bytes].
@@ -28,6 +29,9 @@ RECORDED_STEP_BYTES = 1024
 #: Memory one robot of the vectorised batch simulator takes (its ~30 state and metric
 #: arrays of float64, twice for temporaries) [bytes].
 BATCH_ROBOT_BYTES = 512
+#: Exit status of a command whose runs started and could not all end (the Dask scheduler
+#: went away).
+INCOMPLETE_STATUS = 1
 
 
 class UsageError(NfmrError):
@@ -59,8 +63,9 @@ def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
     Returns
     -------
     int
-        ``body``'s exit status; 2 after a user error (one line), 0 on a closed stdout
-        (``| head``), 130 on Ctrl-C, SIGTERM or SIGHUP (one line).
+        ``body``'s exit status; 2 after a user error (one line), 1 after the Dask
+        scheduler went away during the runs (one line, :class:`SchedulerLost`), 0 on a
+        closed stdout (``| head``), 130 on Ctrl-C, SIGTERM or SIGHUP (one line).
 
     """
     take_signals()
@@ -73,6 +78,9 @@ def run_command(parser: argparse.ArgumentParser, body, argv=None) -> int:
     except KeyboardInterrupt:
         print(f'\n{parser.prog}: interrupted', file=sys.stderr)
         return INTERRUPTED_STATUS
+    except SchedulerLost as exc:
+        print(f'{parser.prog}: error: {exc}', file=sys.stderr)
+        return INCOMPLETE_STATUS
     except NfmrError as exc:
         return report_user_error(parser.prog, exc)
 
@@ -177,7 +185,9 @@ def check_writable(path: Path, option: str, directory: bool = False) -> None:
     Raises
     ------
     UsageError
-        ``path`` cannot be written; the message names ``option``.
+        ``path`` cannot be written: a folder where a file is expected or the other way
+        round, a file where a folder of its path would be, or a place that refuses; the
+        message names ``option``.
 
     """
     path = Path(path)
@@ -186,6 +196,9 @@ def check_writable(path: Path, option: str, directory: bool = False) -> None:
     if directory and path.exists() and not path.is_dir():
         raise UsageError(f'{option} {path}: is a file, expected a folder')
     folder = path if directory else path.parent
+    existing = next((p for p in (folder, *folder.parents) if os.path.lexists(p)), None)
+    if existing is not None and not os.path.isdir(existing):
+        raise UsageError(f'{option} {path}: {existing} is a file, not a folder')
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):

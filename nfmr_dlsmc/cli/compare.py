@@ -6,7 +6,9 @@ holding the path), the figures of section 4.2 as PNG files and ``results.json``;
 are on the kinematic model (3) or the pybullet chassis
 (:mod:`nfmr_dlsmc.analysis.comparison_runs`). With ``--path FILE`` every controller
 follows that path instead, from its start to its end, and the report holds how each held
-it and arrived.
+it and arrived. On a Dask cluster whose scheduler goes away, ``results.json`` holds the runs
+that had ended, marked partial (``"complete": false``), and the command ends with exit
+status 1.
 """
 
 import argparse
@@ -43,6 +45,7 @@ from nfmr_dlsmc.cli.common import (
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
 from nfmr_dlsmc.runtime.share import shipped_config
+from nfmr_dlsmc.runtime.worker_pool import SchedulerLost
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -128,7 +131,13 @@ def _run(args) -> int:
         print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
               f'plant{odometry}, {describe_workers(where)}, gains from {gains_path}',
               file=sys.stderr)
-        metrics, series = run_all(tasks, where, progress)
+        try:
+            metrics, series = run_all(tasks, where, progress)
+        except SchedulerLost as lost:
+            print(file=sys.stderr)  # after the progress line
+            if lost.partial[0]:
+                _write_partial(args, lost, len(tasks))
+            raise
         print(file=sys.stderr)
         cluster = cluster_report(where)
         where = describe_workers(where)
@@ -151,6 +160,17 @@ def _run(args) -> int:
           f'in {time.perf_counter() - begin:.1f} s', file=sys.stderr)
     print(args.out)
     return 0
+
+
+def _write_partial(args, lost: SchedulerLost, asked: int) -> None:
+    """Write results.json of the runs that ended before the scheduler went, marked partial."""
+    metrics = lost.partial[0]
+    args.out.mkdir(parents=True, exist_ok=True)
+    document = {'complete': False, 'runs_finished': len(metrics), 'runs_asked': asked,
+                **results_document(metrics, args.plant, args.sensing)}
+    path = args.out / 'results.json'
+    path.write_text(json.dumps(json_ready(document), indent=1))
+    lost.kept = f'{path} holds those {len(metrics)} (partial, "complete": false; no report)'
 
 
 if __name__ == '__main__':

@@ -1,7 +1,9 @@
 """
 ``nfmr-montecarlo``: the DLSMC from many random starts, kinematic or on pybullet.
 
-The runs and their summary are :mod:`nfmr_dlsmc.analysis.montecarlo`'s.
+The runs and their summary are :mod:`nfmr_dlsmc.analysis.montecarlo`'s. On a Dask cluster
+whose scheduler goes away, the runs that had ended are summarised as a partial result
+(``"complete": false``) and the command ends with exit status 1.
 """
 
 import argparse
@@ -43,6 +45,7 @@ from nfmr_dlsmc.cli.common import (
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
+from nfmr_dlsmc.runtime.worker_pool import SchedulerLost
 import numpy as np
 
 
@@ -130,19 +133,43 @@ def _run(args) -> int:
         print(f'{args.n} starts, {args.duration:g} s each, {how} ...', file=sys.stderr,
               flush=True)
         begin = time.perf_counter()
-        runs = run_starts(args.plant, params, world, starts, args.duration,
-                          disturbance_by_name(args.disturbance), args.hold_last, where,
-                          _progress(begin, args.plant))
+        try:
+            runs = run_starts(args.plant, params, world, starts, args.duration,
+                              disturbance_by_name(args.disturbance), args.hold_last, where,
+                              _progress(begin, args.plant))
+        except SchedulerLost as lost:
+            print(file=sys.stderr)  # after the progress line
+            if lost.partial is not None:
+                ended, runs = lost.partial
+                _report(args, params.dlsmc.dt, starts[ended], origin, runs,
+                        time.perf_counter() - begin, None,
+                        {'complete': False, 'runs_finished': len(ended), 'runs_asked': args.n})
+                lost.kept = (f'the summary printed is of those {len(ended)} (partial'
+                             + (', "complete": false)' if args.json else ')'))
+            raise
         if not batch:
             print(file=sys.stderr)  # after the progress line
         elapsed = time.perf_counter() - begin
         cluster = cluster_report(where)
-    summary = {'plant': args.plant, 'params': args.params,
+    _report(args, params.dlsmc.dt, starts, origin, runs, elapsed, cluster)
+    return 0
+
+
+def _report(args, dt: float, starts: np.ndarray, origin, runs: dict, elapsed: float,
+            cluster: dict | None, partial: dict | None = None) -> None:
+    """
+    Print the summary of ``runs`` from ``starts`` (text, or JSON with --json), write --plots.
+
+    ``dt`` is the control period [s], ``elapsed`` the wall time of the runs [s],
+    ``cluster`` :func:`cluster_report`'s; ``partial`` (complete, runs_finished, runs_asked)
+    marks a summary of the runs that ended before the cluster's scheduler went away.
+    """
+    summary = {'plant': args.plant, 'params': args.params, **(partial or {}),
                **summarise(args.plant, starts, runs, args.duration, args.hold_last)}
     if cluster is not None:
         summary['cluster'] = cluster
     summary['wall_s'] = round(elapsed, 3)
-    summary['robot_steps_per_s'] = args.n * round(args.duration / params.dlsmc.dt) / elapsed
+    summary['robot_steps_per_s'] = len(starts) * round(args.duration / dt) / elapsed
     if args.plots:
         paths = plot_starts(args.plant, starts, origin, runs, args.plots)
         print(f"plots: {', '.join(map(str, paths))}", file=sys.stderr)
@@ -152,7 +179,6 @@ def _run(args) -> int:
         print(format_summary(summary))
         if cluster is not None:
             print(format_cluster_report(cluster))
-    return 0
 
 
 def _progress(begin: float, plant: str):

@@ -39,6 +39,7 @@ from nfmr_dlsmc.cli.common import (
     add_workers,
     check_output_file,
     check_run_length,
+    check_writable,
     cluster_report,
     format_cluster_report,
     json_ready,
@@ -198,6 +199,8 @@ def _tune_on_chassis(args) -> int:
     history = out.with_name(f'{out.stem}_history.png')
     importances = out.with_name(f'{out.stem}_importances.png')
     check_output_file(out, args.force)
+    for plot in (history, importances):
+        check_writable(plot, f'--out {out}: its plot')
     check_run_length(setup.duration, tuning.evaluations[0].params.dlsmc.dt,
                      args.jobs if args.scheduler is None else 1)
     url = args.storage or f"sqlite:///{out.parent.resolve() / 'study.db'}"
