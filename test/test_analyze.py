@@ -99,6 +99,7 @@ def test_a_bag_from_an_independent_writer(case1, tmp_path):
     assert got['t_conv'] == pytest.approx(7.0, abs=0.02)
 
 
+@pytest.mark.slow
 def test_several_bags_give_one_table_and_overlaid_plots(case1_bag, tmp_path):
     other = simulate(DlsmcController(), make_trajectory('sine'), (4.0, 1.0, 0.0), 100.0)
     second = tmp_path / 'start41'

@@ -94,6 +94,7 @@ def test_per_robot_gains_equal_separate_runs():
         simulate_batch(DlsmcConfig(), make_trajectory('sine'), start, 1.0, outer={'h': [1, 1]})
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('ratio', ['fixed', 'both'])
 @pytest.mark.commands
 def test_tune_writes_a_usable_file_no_slower_than_the_paper_gains(tmp_path, ratio):

@@ -205,6 +205,7 @@ def pybullet_report(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.sim
 def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
@@ -221,6 +222,7 @@ def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_repor
                 assert figures['hold_steer_joint_rate_max'] is not None  # measured joints
 
 
+@pytest.mark.slow
 @pytest.mark.sim
 def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())
@@ -236,6 +238,7 @@ def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybul
     assert case1['dlsmc']['hold_steer_joint_rate_max'] > 15.0  # at the 20 rad/s cap
 
 
+@pytest.mark.slow
 @pytest.mark.sim
 def test_with_sensing_every_law_sees_the_robots_odometry(tmp_path, pybullet_report):
     out = tmp_path / 'good'
@@ -261,6 +264,7 @@ def test_sensing_on_the_kinematic_plant_is_refused(capsys):
     assert '--sensing applies to --plant pybullet' in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.sim
 def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):
     document = json.loads((pybullet_report / 'results.json').read_text())

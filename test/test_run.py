@@ -240,6 +240,7 @@ def test_the_ros_run_agrees_with_the_same_run_in_one_process(short_run):
     assert float(ros_ise) == pytest.approx(float(in_process_ise), rel=0.02)
 
 
+@pytest.mark.slow
 def test_a_lockstep_rerun_is_identical_to_the_last_bit(short_run, tmp_path):
     # Same file, same start: every tick's state and every ground-truth pose are equal, bit
     # for bit (the sim applies the per-wheel commands of each step whatever message of the
@@ -359,6 +360,7 @@ def test_the_recorder_gets_a_latched_message_published_before_it_subscribed(tmp_
     assert deserialize_message(bytes(raw), PathMessage) == sent
 
 
+@pytest.mark.slow
 def test_a_lockstep_run_with_slow_late_odometry_ticks_every_step(tmp_path):
     # `good` sensing: odometry at 100 Hz, 10 ms late. The controller still ticks once per
     # simulated step (on /clock), and each odometry message is stamped when it was true.
@@ -401,6 +403,7 @@ def test_the_end_says_how_the_run_kept_its_timing(short_run):
     assert timing['controller_loop']['overruns'] == 0 and timing['sim_braked'] == 0
 
 
+@pytest.mark.slow
 def test_a_path_file_is_followed_from_its_start_and_the_run_says_how_it_ended(tmp_path):
     from nfmr_dlsmc.bag.reader import read_bag
 

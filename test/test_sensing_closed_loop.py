@@ -21,6 +21,7 @@ def case1(params_file, sensing, trajectory=None):
     return metrics
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     'params_file, sensing, trajectory, distance, theta_e, omega_tv, steer_rate', [
         # 100 Hz, 10 ms late, 1 mm / 1 mrad noise: the estimator turns it into a pose the
