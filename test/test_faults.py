@@ -104,7 +104,7 @@ def test_a_controller_that_does_not_answer_deactivate_after_the_run_leaves_it_wh
     finally:
         run.kill()
     assert run.returncode == 0, stderr
-    assert re.search(r"nfmr-run: warning: the controller did not answer transition "
+    assert re.search(r'nfmr-run: warning: the controller did not answer transition '
                      r"'deactivate' within 10 s \(waited 1\d\.\d s\); the run had reached "
                      r'its duration', stderr), stderr
     assert 'IAE of distance' in stdout  # the report of the whole run
