@@ -152,3 +152,30 @@ def test_the_files_initial_pose_is_the_chassis_start_unless_x0_says_otherwise(
     assert load_evaluation(plant, 'dlsmc', None, 1.0, 'none', path).x0 == x0
     given = (0.0, 1.0, 0.0)
     assert load_evaluation(plant, 'dlsmc', given, 1.0, 'none', path).x0 == given
+
+
+@pytest.mark.sim  # named, not stepped: refused before
+@pytest.mark.parametrize('odometry, needle', [
+    ({'odom_latency': 0.25}, 'disturbance.odom_latency = 0.25 s: must be below the '
+                             "controller's odom_timeout = 0.25 s"),
+    ({'odom_rate': 0.1}, 'disturbance.odom_rate = 0.1 Hz: a message every 10 s, 0 s late, is '
+                         "older than the controller's odom_timeout = 0.25 s"),
+    ({'odom_rate': 10.0, 'odom_latency': 0.16}, 'disturbance.odom_rate = 10.0 Hz'),
+])
+@pytest.mark.parametrize('command', ['eval', 'run'])
+def test_odometry_the_controller_finds_stale_is_refused_by_eval_and_run_alike(
+        tmp_path, capsys, command, odometry, needle):
+    import importlib
+
+    import yaml
+
+    shipped = yaml.safe_load((Path(__file__).parents[1] / 'config/robot_case1.yaml').read_text())
+    shipped['sim']['ros__parameters'].setdefault('disturbance', {}).update(odometry)
+    file = tmp_path / 'late.yaml'
+    file.write_text(yaml.safe_dump(shipped))
+    args = (['--plant', 'pybullet', '--params', str(file)] if command == 'eval'
+            else [str(file), '--out', str(tmp_path / 'runs')])
+    status = importlib.import_module(f'nfmr_dlsmc.cli.{command}').main(args)
+    err = capsys.readouterr().err
+    assert status == 2 and err.count('\n') == 1 and needle in err, err
+    assert not list(tmp_path.glob('runs/*'))  # no run started

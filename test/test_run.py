@@ -428,6 +428,8 @@ def test_a_path_file_is_followed_from_its_start_and_the_run_says_how_it_ended(tm
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     labels = ('end of the path', 'stopped at', 'distance to the goal at rest',
-              '|heading error| at the goal at rest')
+              '|heading error| at the goal at rest', 'hold: distance p99', 'hold: distance max')
+    assert '(hold: after 5 s)' in proc.stdout  # the window nfmr-run used for this bag
     printed = {k: cells[0] for k, cells in table_columns(stdout, labels).items()}
+    assert len(printed) == len(labels)
     assert {k: cells[0] for k, cells in table_columns(proc.stdout, labels).items()} == printed

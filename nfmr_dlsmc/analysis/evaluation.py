@@ -25,6 +25,7 @@ from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import (
+    check_odometry_timing,
     controller_params,
     ControllerParams,
     load_gain_blocks,
@@ -156,6 +157,9 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
                              'kinematic model has no odometry')
     world = (pybullet_world(params_file, params.dlsmc.dt, sensing) if plant == 'pybullet'
              else None)
+    if world is not None:  # the rule nfmr-run applies
+        check_odometry_timing(world.disturbance.odom_rate, world.disturbance.odom_latency,
+                              flat)
     return Evaluation(plant, controller_name, controller, params, trajectory, world,
                       tuple(x0), duration, disturbance)
 
@@ -233,8 +237,9 @@ def evaluate(evaluation: Evaluation, hold_from: float,
                     evaluation.trajectory, evaluation.x0, evaluation.duration,
                     evaluation.world, disturbance_by_name(evaluation.disturbance), progress)
     cpu_s = time.process_time() - start
-    result = simulation_metrics(sim, hold_from,
-                                getattr(evaluation.trajectory, 'end_pose', None)).as_dict()
+    goal = getattr(evaluation.trajectory, 'end_pose', None)
+    path_end = None if goal is None else evaluation.trajectory.duration
+    result = simulation_metrics(sim, hold_from, goal, path_end).as_dict()
     result['scenario'] = {
         'controller': evaluation.controller_name, 'plant': evaluation.plant,
         'trajectory': PATH if hasattr(evaluation.trajectory, 'end_pose')

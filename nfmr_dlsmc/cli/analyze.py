@@ -28,10 +28,12 @@ from nfmr_dlsmc.cli.common import (
     run_command,
     UsageError,
 )
-from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.ros.animation_tracks import ANIMATION_TOPICS
 from nfmr_dlsmc.ros.bag_animation import animate_contents
 from nfmr_dlsmc.ros.run_series import (
+    DIAGNOSTICS_TOPIC,
+    follows_a_path,
     GROUND_TRUTH_TOPIC,
     ground_truth_track,
     JOINT_TOPIC,
@@ -53,9 +55,10 @@ def _parser() -> argparse.ArgumentParser:
                         help='bag directory or .mcap file')
     parser.add_argument('--plots', type=Path, metavar='DIR',
                         help='write overlaid trajectory, error and input plots here')
-    parser.add_argument('--hold-from', type=float, default=HOLD_FROM, metavar='SECONDS',
+    parser.add_argument('--hold-from', type=float, default=None, metavar='SECONDS',
                         help='start of the window of the hold figures, trajectory time [s] '
-                             f'(default {HOLD_FROM:g})')
+                             f'(default {HOLD_FROM:g}; {PATH_HOLD_FROM:g} for a bag of a path, '
+                             'as nfmr-run measured it)')
     parser.add_argument('--json', action='store_true',
                         help='print one JSON object (last line) instead of the table')
     defaults = AnimationConfig()
@@ -84,7 +87,7 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    if not args.hold_from >= 0.0:
+    if args.hold_from is not None and not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate is None and (args.animate_speed, args.animate_fps) != (None, None):
         raise UsageError('--animate-speed and --animate-fps need --animate')
@@ -130,7 +133,7 @@ def _animate(result: dict, args, started: float) -> None:
           f"{shown['pose']}; geometry {shown['geometry']}", file=sys.stderr)
 
 
-def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
+def _measure(path: Path, hold_from: float | None, animate: bool = False) -> dict:
     """
     Read and measure one bag; a truncated bag's warning goes to stderr.
 
@@ -144,7 +147,7 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
 
     """
     topics = ANIMATION_TOPICS if animate else (STATE_TOPIC, JOINT_TOPIC, GROUND_TRUTH_TOPIC)
-    contents = read_bag(path, topics=[*topics, REFERENCE_PATH_TOPIC])
+    contents = read_bag(path, topics=[*topics, REFERENCE_PATH_TOPIC, DIAGNOSTICS_TOPIC])
     warning = contents.warning()
     if warning:
         print(f'nfmr-analyze: warning: {warning}', file=sys.stderr)
@@ -152,6 +155,8 @@ def _measure(path: Path, hold_from: float, animate: bool = False) -> dict:
     series = with_ground_truth(state, ground_truth_track(contents))
     for note in run_notes(skipped, last_segment(series)[1]):
         print(f'nfmr-analyze: warning: {path}: {note}', file=sys.stderr)
+    if hold_from is None:  # nfmr-run's default for the run the bag holds
+        hold_from = PATH_HOLD_FROM if follows_a_path(contents) else HOLD_FROM
     return {'path': str(path), 'label': _label(path), 'series': series,
             'metrics': state_metrics(series, hold_from, steer_joint_rates(contents),
                                      path_goal(contents, series)),

@@ -49,7 +49,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--gui', action='store_true', help='open the pybullet GUI')
     parser.add_argument('--hold-from', type=float, default=None, metavar='SECONDS',
                         help='start of the window of the hold figures [s] '
-                             f'(default {HOLD_FROM:g}; with --path {PATH_HOLD_FROM:g})')
+                             f'(default {HOLD_FROM:g}; following a path, --path or the '
+                             f"file's, {PATH_HOLD_FROM:g})")
     parser.add_argument('--stall-timeout', type=float, default=30.0, metavar='SECONDS',
                         help='stop the run when simulated time has not advanced for this '
                              'long (wall clock) [s] (default 30)')
@@ -74,9 +75,7 @@ def _run(args) -> int:
         raise UsageError(f'--duration must be a finite number > 0 [s], got {args.duration}')
     if not args.stall_timeout > 0.0:
         raise UsageError(f'--stall-timeout must be > 0, got {args.stall_timeout}')
-    if args.hold_from is None:
-        args.hold_from = HOLD_FROM if args.path is None else PATH_HOLD_FROM
-    if not args.hold_from >= 0.0:
+    if args.hold_from is not None and not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:
         raise UsageError('--animate draws the run from its bag: drop --no-record')

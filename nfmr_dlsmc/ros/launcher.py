@@ -25,6 +25,7 @@ import time
 
 from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.bag.writer import BagWriter
+from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.validation import ParameterError
@@ -41,9 +42,9 @@ from nfmr_dlsmc.ros.node_processes import (
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
 from nfmr_dlsmc.ros.run_report import report_run, report_timing, run_timing
 from nfmr_dlsmc.runtime.params import (
+    check_odometry_timing,
     controller_params,
     load_params_file,
-    NodeOptions,
     ParamsFileError,
     path_file,
     path_values,
@@ -71,7 +72,6 @@ RUN_TOPICS = {
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
 LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
-ODOM_TIMEOUT_DEFAULT = NodeOptions.odom_timeout  # [s] the controller's, unless the file says
 
 
 @dataclass(frozen=True)
@@ -94,8 +94,9 @@ class RunOptions:
         Do not write a bag.
     gui : bool
         Open the pybullet GUI.
-    hold_from : float
-        Start of the window of the hold figures [s].
+    hold_from : float or None
+        Start of the window of the hold figures [s]; None: HOLD_FROM, or PATH_HOLD_FROM
+        for a run that follows a path (``--path`` or the file's).
     stall_timeout : float
         Stop the run when simulated time has not advanced for this long (wall clock) [s].
     no_compare : bool
@@ -119,7 +120,7 @@ class RunOptions:
     out: Path
     no_record: bool
     gui: bool
-    hold_from: float
+    hold_from: float | None
     stall_timeout: float
     no_compare: bool
     animate: bool = False
@@ -153,6 +154,9 @@ def run(options: RunOptions) -> int:
         options = replace(options, path=path_file(str(options.path)).absolute())
         controller_flat |= path_values(options.path)
     params = controller_params(controller_flat)
+    if options.hold_from is None:  # a path's run settles sooner than the paper's 15 s
+        options = replace(options, hold_from=PATH_HOLD_FROM if hasattr(
+            params.trajectory, 'end_pose') else HOLD_FROM)
     if options.duration is None:  # a path's own (to the next 0.1 s), else the paper's
         duration = getattr(params.trajectory, 'duration', PAPER_DURATION - PATH_MARGIN)
         options = replace(options, duration=math.ceil(10.0 * (duration + PATH_MARGIN)) / 10.0)
@@ -168,8 +172,8 @@ def run(options: RunOptions) -> int:
     if round(options.duration / params.dlsmc.dt) < 1:
         raise ParameterError('--duration', options.duration, 'must be at least one control '
                              f'period ({params.dlsmc.dt:g} s)', 's')
-    _check_latency(settings.world.disturbance.odom_latency,
-                   float(controller_flat.get('odom_timeout', ODOM_TIMEOUT_DEFAULT)))
+    odometry = settings.world.disturbance
+    check_odometry_timing(odometry.odom_rate, odometry.odom_latency, controller_flat)
     reservation = reserve_domain(options.domain)
     try:
         return _run(options, config, params, settings, reservation)
@@ -344,21 +348,6 @@ def _new_run_dir(out: Path, config: Path) -> Path:
         path, n = Path(f'{base}_{n}'), n + 1
     path.mkdir(parents=True)
     return path
-
-
-def _check_latency(latency: float, odom_timeout: float) -> None:
-    """
-    Refuse odometry later than the controller's odometry timeout.
-
-    Raises
-    ------
-    ParameterError
-        Naming ``disturbance.odom_latency``.
-
-    """
-    if latency >= odom_timeout:
-        raise ParameterError('disturbance.odom_latency', latency, 'must be below the '
-                             f"controller's odom_timeout = {odom_timeout:g} s of this run", 's')
 
 
 def _robot_mismatch(params, settings) -> str | None:

@@ -127,6 +127,18 @@ def loop_windows(contents: BagContents) -> list[dict]:
     return windows
 
 
+def follows_a_path(contents: BagContents) -> bool:
+    """
+    Return whether the run followed a path to its end (``trajectory.name: path``).
+
+    Its controller names the arrival on ``/diagnostics`` from the first report on, whether
+    the robot got there or not; an analytic trajectory has none.
+    """
+    return any(kv.key == 'arrival' for _, message in decoded(
+        contents.of(DIAGNOSTICS_TOPIC), DiagnosticArray) for status in message.status
+        for kv in status.values)
+
+
 def ground_truth_track(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:
     """
     Return the true pose of P the bag records: (stamps [s], poses (N, 3)), or None.
@@ -171,19 +183,26 @@ def steer_joint_rates(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | 
 
 def path_goal(contents: BagContents, series: dict) -> tuple | None:
     """
-    Return the goal (x [m], y [m], yaw [rad]) of a run that ended at one, else None.
+    Return the goal (x [m], y [m], yaw [rad]) of a run along a path, else None.
 
-    A run ended at a goal when its state's ``arrival`` is not 0 at the end; the goal is the
-    last pose of the last ``/reference_path``, the path it followed last.
+    The goal is the last pose of the last ``/reference_path``, the path it followed last.
+    A run followed a path when its state's ``arrival`` is not 0 at the end (it ended at the
+    goal), or when its reference rests at that pose at the end (the path ended, the robot
+    had not arrived). A run that ended before its path did cannot be told from one along a
+    trajectory without an end: None.
     """
     arrival = series.get('arrival')
     paths = contents.of(REFERENCE_PATH_TOPIC)
-    if arrival is None or not len(arrival) or arrival[-1] == 0.0 or not paths:
+    if arrival is None or len(arrival) < 2 or not paths:
         return None
     plans = decoded(paths[-1:], PathMessage)
     poses = plans[0][1].poses if plans else None
     if not poses:
         return None
     pose = poses[-1].pose
+    x, y = pose.position.x, pose.position.y
+    resting = (np.all(series['x_d'][-2:] == x) and np.all(series['y_d'][-2:] == y))
+    if arrival[-1] == 0.0 and not resting:
+        return None
     q = pose.orientation
-    return pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w)
+    return x, y, yaw_from_quaternion(q.x, q.y, q.z, q.w)

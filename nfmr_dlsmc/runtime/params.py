@@ -30,7 +30,7 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 from nfmr_dlsmc.baselines.registry import gain_sections
-from nfmr_dlsmc.core.arrival import ArrivalConfig
+from nfmr_dlsmc.core.arrival import ArrivalConfig, check_goal_reach
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.path_reference import PathProfile
@@ -238,6 +238,41 @@ def load_params_file(path, node_name: str = 'controller') -> dict:
     return merged
 
 
+def check_odometry_timing(odom_rate: float, odom_latency: float, flat: dict) -> None:
+    """
+    Refuse simulated odometry that the controller of ``flat`` would find stale.
+
+    The newest message is ``odom_latency`` old when it arrives and ``odom_latency +
+    1 / odom_rate`` old just before the next: at or beyond the controller's
+    ``odom_timeout`` the robot would be stopped, between messages or for good. The same
+    rule for ``nfmr-run`` and ``nfmr-eval --plant pybullet``.
+
+    Parameters
+    ----------
+    odom_rate : float
+        [Hz] the sim's ``disturbance.odom_rate``.
+    odom_latency : float
+        [s] the sim's ``disturbance.odom_latency``.
+    flat : dict
+        The controller's flat parameters (``odom_timeout``, default NodeOptions').
+
+    Raises
+    ------
+    ParameterError
+        Naming ``disturbance.odom_latency`` or ``disturbance.odom_rate``.
+
+    """
+    timeout = float(flat.get('odom_timeout', NodeOptions.odom_timeout))
+    if odom_latency >= timeout:
+        raise ParameterError('disturbance.odom_latency', odom_latency, 'must be below the '
+                             f"controller's odom_timeout = {timeout:g} s of this run", 's')
+    if odom_latency + 1.0 / odom_rate >= timeout:
+        raise ParameterError('disturbance.odom_rate', odom_rate, (
+            f'a message every {1.0 / odom_rate:g} s, {odom_latency:g} s late, is older than '
+            f"the controller's odom_timeout = {timeout:g} s before the next arrives: the "
+            'robot would be stopped between messages'), 'Hz')
+
+
 def _trajectory_parameters() -> list[Param]:
     """Return ``trajectory.name`` and the parameters of each trajectory under its name."""
     found = [_TRAJECTORY_NAME]
@@ -323,8 +358,10 @@ def controller_params(flat: dict) -> ControllerParams:
                              'which crab mode (j1 = -1) cannot')
     path_profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max,
                              v_max=dlsmc.limits.v_max)
+    arrival = from_flat(ArrivalConfig, flat)
     if trajectory_name == PATH:
         reference = _path_reference(flat, path_profile)
+        check_goal_reach(reference, arrival)
     else:
         reference = _analytic_reference(trajectory_name, own, trajectory)
     return ControllerParams(dlsmc=dlsmc,
@@ -334,7 +371,7 @@ def controller_params(flat: dict) -> ControllerParams:
                             geometry=from_flat(RobotGeometry, flat),
                             estimator=from_flat(EstimatorConfig, flat),
                             path_profile=path_profile,
-                            arrival=from_flat(ArrivalConfig, flat))
+                            arrival=arrival)
 
 
 def _analytic_reference(name: str, own: str, values: dict):
