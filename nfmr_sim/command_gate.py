@@ -272,6 +272,20 @@ class CommandGate:
                 lambda: (self._new_steer and self._new_wheels) or self._new_twist
                 or self._new_reject, timeout)
 
+    def wait_for_fresh_command(self, now: float, max_age: float, timeout: float) -> bool:
+        """
+        Wait up to ``timeout`` wall seconds until the newest command is fresh (realtime).
+
+        Fresh: taken at most ``max_age`` [s] of simulated time before ``now`` (commands that
+        arrive meanwhile are taken at ``now``: the sim does not step while it waits), or a
+        rejected message. True at once before any command: there is no controller to wait
+        for yet. False when none came within ``timeout``.
+        """
+        with self._cond:
+            return self._cond.wait_for(
+                lambda: self._last_valid is None or self._new_reject
+                or now - self._last_valid <= max_age, timeout)
+
     def take(self, now: float):
         """
         Return the command to apply at sim time ``now``, or None to brake.

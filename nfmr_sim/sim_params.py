@@ -63,6 +63,13 @@ class SimSettings:
                                     'time to spare, but each catch-up is a burst of steps '
                                     'the controller cannot tick through (D25)',
                                     NON_NEGATIVE)
+    realtime_max_command_age: float = param(
+        0.005, 's', 'realtime: before a step the sim waits (at most '
+        'REALTIME_COMMAND_WAIT of wall time) until its newest command is at most this old in '
+        'simulated time, so that a controller slowed down by a busy machine slows the run '
+        'instead of falling behind it (D27); it waits only for a controller that has '
+        'commanded, and gives up on one silent for that long until it commands again; 0: '
+        'never wait', NON_NEGATIVE)
     lockstep_timeout: float = param(0.5, 's', 'wall time a lockstep step waits for its '
                                     'command', POSITIVE)
     command_timeout: float = param(0.1, 's', 'simulated time without a valid command after '

@@ -211,3 +211,25 @@ def test_wheel_speeds_after_a_twist_do_not_pair_with_its_steering():
     assert gate.wait_for_step_command(0.0)
     command, _ = gate.take(0.001)
     np.testing.assert_array_equal(command[1], np.zeros(4))
+
+
+def test_a_realtime_step_waits_for_a_fresh_command_only_for_a_controller_that_commanded():
+    import threading
+    import time
+
+    gate = CommandGate(0.1, GEOMETRY, 0.0, max_wheel_speed=50.0)
+    # No command yet: nobody to wait for.
+    assert gate.wait_for_fresh_command(5.0, 0.005, timeout=10.0)
+    gate.offer_twist(0.5, 0.0, 0.0, 1.000)
+    assert gate.wait_for_fresh_command(1.005, 0.005, timeout=0.0)  # 5 ms old: fresh
+    start = time.monotonic()
+    assert not gate.wait_for_fresh_command(1.006, 0.005, timeout=0.05)  # stale: waits
+    assert time.monotonic() - start >= 0.05
+    # A command taken while the sim waits (at the time it stands at) ends the wait.
+    later = threading.Timer(0.05, gate.offer_twist, (0.5, 0.0, 0.0, 1.006))
+    later.start()
+    assert gate.wait_for_fresh_command(1.006, 0.005, timeout=30.0)
+    later.join()
+    # So does a rejected one: the step brakes at once instead of waiting.
+    gate.offer_wheels([math.nan] * 4, 1.006)
+    assert gate.wait_for_fresh_command(2.0, 0.005, timeout=30.0)

@@ -1,10 +1,12 @@
 """
-Services answer while the 1 kHz loop runs on a machine with no free core.
+A realtime run on a machine with no free core: services answer, the robot keeps the path.
 
 A realtime run beside two CPU-bound processes (on two cores: none free for the run's three
 processes), while this test asks the controller and the sim for their state and parameters
 every 0.2 s: every call is answered within the bound doc/nodes.md gives, the launcher's
-``deactivate`` too, and the run ends with exit 0.
+``deactivate`` too, and the run ends with exit 0. Judged on the path, not on the clock: the
+run may be slower than real time, but the robot holds the path as on an idle machine
+(design D27).
 """
 
 import os
@@ -29,7 +31,12 @@ RUN = str(Path(sys.executable).parent / 'nfmr-run')
 #: bound doc/nodes.md documents (measured there at about half of it).
 ANSWER_BOUND = 2.0
 HOG = 'while True: pass'
-DURATION = 12  # [s] of simulated time
+DURATION = 14  # [s] of simulated time
+HOLD_FROM = 9.0  # [s]: Case 1 from (1, 4, 0) is within 1 mm after about 7 s
+#: Bounds of the hold beside the hogs: on an idle machine distance p99 ~1 mm and the steer
+#: joints at ~3 rad/s; a run that lost step held 240 mm with the joints at their 20 rad/s.
+HOLD_DISTANCE_P99 = 0.005  # [m]
+STEER_JOINT_RATE = 8.0  # [rad/s]
 
 
 def _clients(node):
@@ -53,7 +60,12 @@ def _ask(executor, client, request, longest: float) -> float:
     return time.monotonic() - start
 
 
-def test_every_service_answers_within_the_bound_beside_two_cpu_hogs(tmp_path):
+def _figure(table: str, label: str) -> float:
+    """Return the number of the row ``label`` of the run's metrics table."""
+    return float(re.search(rf'^{re.escape(label)}\s.*?(\S+)$', table, re.M).group(1))
+
+
+def test_beside_two_cpu_hogs_services_answer_and_the_robot_keeps_the_path(tmp_path):
     hogs = [subprocess.Popen([sys.executable, '-c', HOG]) for _ in range(2)]
     context = new_context()
     node = rclpy.create_node('service_probe', context=context)
@@ -66,6 +78,7 @@ def test_every_service_answers_within_the_bound_beside_two_cpu_hogs(tmp_path):
     asked = dict.fromkeys(clients, 0)
     # On this session's domain, where the probe is.
     run = subprocess.Popen([RUN, '--mode', 'realtime', '--duration', str(DURATION),
+                            '--sensing', 'good', '--hold-from', str(HOLD_FROM),
                             '--no-compare', '--domain', os.environ['ROS_DOMAIN_ID'],
                             '--out', str(tmp_path)],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -93,3 +106,5 @@ def test_every_service_answers_within_the_bound_beside_two_cpu_hogs(tmp_path):
     assert max(worst.values()) <= ANSWER_BOUND, worst
     answered = re.search(r'deactivate (\d+\.\d+) s', err)
     assert answered and float(answered.group(1)) <= ANSWER_BOUND, err
+    assert _figure(out, 'hold: distance p99 [m]') <= HOLD_DISTANCE_P99, out
+    assert _figure(out, 'hold: steer joint rate max [rad/s]') <= STEER_JOINT_RATE, out

@@ -18,7 +18,10 @@ or missing ones, brake the wheels; the reason is logged once.
 
 In ``realtime`` mode the steps follow the wall clock (:class:`~nfmr_sim.realtime_pacer.
 RealtimePacer`): a delay up to ``realtime_max_lag`` is caught up, a longer one slows the run
-down; no step is ever skipped, and how far the sim fell behind is logged.
+down; no step is ever skipped, and how far the sim fell behind is logged. A step waits for a
+controller whose newest command is older than ``realtime_max_command_age`` in simulated
+time (design D27), so that a busy machine slows the run instead of leaving the robot
+uncontrolled.
 
 Services, in both modes: ``~/reset`` (std_srvs/Trigger) puts P back at ``initial_pose`` at
 rest, wheels straight, and forgets the commands received, so that the wheels brake until the
@@ -68,6 +71,10 @@ GATE_POLL = 0.01
 PAUSE_POLL = 0.05
 #: Least wall time [s] between two log lines saying the realtime sim fell behind.
 SLIP_LOG_PERIOD = 10.0
+#: Longest wall time [s] a realtime step waits for a fresh command
+#: (``realtime_max_command_age``); a controller silent for longer is not waited for again
+#: until it commands (its commands time out as ``command_timeout`` says).
+REALTIME_COMMAND_WAIT = 1.0
 
 
 class SimNode(SchemaNode):
@@ -120,6 +127,8 @@ class SimNode(SchemaNode):
         self._stepper = LoopThread(self._loop, 'step', node=self)
         self.steps = 0
         self.behind_s, self.slips = 0.0, 0  # realtime: wall time given up, slips (pacer)
+        self.waits, self.waited_s = 0, 0.0  # realtime: waits for the controller, their time
+        self._controller_silent = False  # realtime: no command within REALTIME_COMMAND_WAIT
         self._slips_logged, self._slip_logged_at = 0, -SLIP_LOG_PERIOD
         self.failure = None  # what ended stepping, set by the step thread (LoopThread)
 
@@ -266,6 +275,9 @@ class SimNode(SchemaNode):
                 delay = pacer.delay(time.monotonic())
                 if delay > 0.0:
                     time.sleep(delay)
+                if s.realtime_max_command_age > 0.0 and self._wait_for_controller(
+                        s.realtime_max_command_age):
+                    pacer.delay(time.monotonic())  # a wait beyond max_lag slips the schedule
                 self._note_slip(pacer)
             with self._control:
                 if self._paused:
@@ -276,6 +288,31 @@ class SimNode(SchemaNode):
                     return
             pacer.stepped()
 
+    def _wait_for_controller(self, max_age: float) -> bool:
+        """
+        Realtime: wait until the newest command is at most ``max_age`` [s] old (D27).
+
+        Returns whether the step waited. A controller that let REALTIME_COMMAND_WAIT pass without a command is not waited for
+        again until a fresh one comes.
+        """
+        now = self.world.time
+        if self.gate.wait_for_fresh_command(now, max_age, 0.0):
+            self._controller_silent = False
+            return False
+        if self._controller_silent:
+            return False
+        start = time.monotonic()
+        fresh = self.gate.wait_for_fresh_command(now, max_age, REALTIME_COMMAND_WAIT)
+        self.waits += 1
+        self.waited_s += time.monotonic() - start
+        if not fresh:
+            self._controller_silent = True
+            self.get_logger().warning(
+                f'no command for {REALTIME_COMMAND_WAIT:g} s of wall time at {now:.3f} s of '
+                'simulated time: stepping on in real time without waiting for the controller '
+                'until it commands again')
+        return True
+
     def _note_slip(self, pacer: RealtimePacer) -> None:
         """Realtime: log, at most every 10 s of wall time, how far the sim fell behind."""
         self.behind_s, self.slips = pacer.behind_s, pacer.slips
@@ -284,7 +321,8 @@ class SimNode(SchemaNode):
             self.get_logger().warning(
                 f'slower than real time: {pacer.behind_s:.3f} s behind the wall clock at '
                 f'{self.world.time:.3f} s of simulated time ({pacer.slips} slips beyond '
-                f'realtime_max_lag {pacer.max_lag:g} s); no step is skipped')
+                f'realtime_max_lag {pacer.max_lag:g} s; {self.waits} waits for a fresh '
+                f'command, {self.waited_s:.3f} s); no step is skipped')
             self._slips_logged, self._slip_logged_at = pacer.slips, now
 
     def _wait_for_step_command(self, timeout: float) -> None:
