@@ -108,13 +108,35 @@ sys.exit(main())
 """
 
 
+# The same, on a machine so busy that the activation is still being announced when the
+# loop's 100th tick fails (the announcement then finds the context shut down).
+SLOW_ACTIVATION = FAILING_TICK.replace('tracking_session.TrackingSession.tick = failing_tick', """
+tracking_session.TrackingSession.tick = failing_tick
+import time
+from nfmr_dlsmc.ros.controller_node import ControllerNode
+activate = ControllerNode.on_activate
+
+def slow_activate(self, state):
+    result = activate(self, state)
+    while len(calls) < 100:
+        time.sleep(0.01)
+    time.sleep(0.2)
+    return result
+
+ControllerNode.on_activate = slow_activate
+""")
+
+
 @pytest.mark.parametrize('script, args, message', [
     (FAILING_STEP, ['mode:=realtime'],
      'sim: step thread failed: RuntimeError: injected failure at step 100 (at <string>:'),
     (FAILING_TICK, ['tick_source:=clock'],
      'controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick 100 '
      '(at <string>:'),
-], ids=['sim step thread', 'controller clock loop'])
+    (SLOW_ACTIVATION, ['tick_source:=clock'],
+     'controller: dlsmc-1khz thread failed: RuntimeError: injected failure at tick 100 '
+     '(at <string>:'),
+], ids=['sim step thread', 'controller clock loop', 'controller clock loop, slow activation'])
 def test_a_failing_loop_thread_ends_the_node_naming_the_error(script, args, message):
     proc = subprocess.run([sys.executable, '-c', script, '--ros-args', '-p', *args],
                           capture_output=True, text=True, timeout=60)

@@ -69,9 +69,9 @@ def run_node(prog: str, factory, args=None) -> int:
     # (doc/performance.md).
     executor = EventsExecutor()
     executor.add_node(node)
-    node.start()
     code = 0
     try:
+        node.start()
         # The spin ends here on Ctrl-C or SIGTERM, with the context still valid, so that
         # destroying the node can still publish (the controller's zero command).
         while rclpy.ok() and not stop.requested:
@@ -79,8 +79,9 @@ def run_node(prog: str, factory, args=None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:
-        # A callback caught publishing while the context was shut down (as a fatal loop
-        # failure does) raises "publisher's context is invalid": not a new failure.
+        # A callback, or the start's own activation on a busy machine, caught publishing
+        # while the context was shut down (as a fatal loop failure does) raises "publisher's
+        # context is invalid": not a new failure.
         if rclpy.ok():
             raise
     finally:
