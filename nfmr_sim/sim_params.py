@@ -67,7 +67,7 @@ class SimSettings:
         0.005, 's', 'realtime: before a step the sim waits (at most '
         'REALTIME_COMMAND_WAIT of wall time) until its newest command is at most this old in '
         'simulated time, so that a controller slowed down by a busy machine slows the run '
-        'instead of falling behind it (D27); it waits only for a controller that has '
+        'instead of falling behind it (D28); it waits only for a controller that has '
         'commanded, and gives up on one silent for that long until it commands again; 0: '
         'never wait', NON_NEGATIVE)
     lockstep_timeout: float = param(0.5, 's', 'wall time a lockstep step waits for its '

@@ -2,6 +2,7 @@
 
 import collections
 import contextlib
+import ctypes
 from dataclasses import dataclass, replace
 import math
 import os
@@ -19,24 +20,34 @@ from pybullet_utils.bullet_client import BulletClient
 
 STEER_JOINTS = tuple(f'{w}_steer' for w in WHEEL_NAMES)
 DRIVE_JOINTS = tuple(f'{w}_drive' for w in WHEEL_NAMES)
+#: The C library of this process, for its ``fflush``.
+_LIBC = ctypes.CDLL(None)
 
 
 @contextlib.contextmanager
-def _stdout_to_stderr():
+def _stdout_silenced():
     """
-    Send what is written to file descriptor 1 to descriptor 2 for the duration.
+    Discard what is written to file descriptor 1 for the duration, the C library's included.
 
-    pybullet's C library prints ``argv[0]=`` on standard output when it connects, which
-    would break a command's ``--json`` output; its other banner goes to standard error.
+    pybullet's C library prints ``argv[0]=`` (and with the GUI, its OpenGL set-up) on
+    standard output when it connects: noise on a terminal and in a command's report, and not
+    JSON after ``--json``. It prints through the C library's ``stdout``, which buffers
+    whatever is not a terminal (unless ``PYTHONUNBUFFERED`` is set): unflushed, the banner
+    would be written to the restored descriptor when the process exits, after the report.
+    So the C buffers are flushed before descriptor 1 is restored. Standard error is left
+    alone (pybullet's build-time banner at import, and its errors, go there).
     """
     sys.stdout.flush()
     saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(2, 1)
+        os.dup2(null, 1)
         yield
     finally:
+        _LIBC.fflush(None)  # every C stream: pybullet's printf goes to /dev/null too
         os.dup2(saved, 1)
         os.close(saved)
+        os.close(null)
 
 
 @dataclass(frozen=True)
@@ -133,7 +144,7 @@ class ChassisWorld:
     def __init__(self, config: WorldConfig | None = None, gui: bool = False):
         config = WorldConfig() if config is None else config
         self.config = config
-        with _stdout_to_stderr():
+        with _stdout_silenced():
             self._client = BulletClient(
                 connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self._client

@@ -12,6 +12,7 @@ import sys
 
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+from nfmr_dlsmc.analysis.evaluation import evaluate, format_table, load_evaluation
 from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.core.arrival import (
     ARRIVAL_OUTCOMES,
@@ -21,7 +22,8 @@ from nfmr_dlsmc.core.arrival import (
 )
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InputLimits
-from nfmr_dlsmc.core.path_reference import PathProfile, PathTrajectory
+from nfmr_dlsmc.core.metrics import PATH_HOLD_FROM
+from nfmr_dlsmc.core.path_reference import PathError, PathProfile, PathTrajectory
 from nfmr_dlsmc.core.trajectories import Sine
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import simulate
@@ -67,6 +69,28 @@ def test_the_robot_stops_at_the_goal_with_the_reference_and_stays_there(trajecto
     assert controller.position_error <= controller.config.goal_tolerance
 
 
+def test_a_robot_facing_away_from_the_path_turns_on_the_spot_first_and_arrives():
+    # On the path's first point, heading back along it. The robot profile (align_speed)
+    # turns on the spot and moves across theta_d at most at v_min while it turns
+    # (doc/design.md, D27). Before, the path's speed floor drove it away at up to v_min
+    # while it turned, and the outer loop's wound-up error then at 1.7 m/s with the heading
+    # still a radian off, on a circle a metre wide.
+    controller = ArrivingController(robot_dlsmc(), L_PATH.end_pose)
+    x, y, heading = L_PATH.start_pose
+    result = run(controller, L_PATH, x0=(x, y, heading + math.pi))
+    theta_e = np.abs(result.telemetry['theta_e'])
+    limits = controller.controller.limits
+    facing_away = theta_e >= math.pi / 2
+    assert facing_away.sum() > 1000  # a second and more of turning
+    assert np.all(result.v[facing_away] == 0.0)
+    assert np.abs(result.omega[facing_away]).max() == limits.omega_max
+    assert np.all(result.v * np.sin(theta_e) <= limits.v_min + 1e-12)
+    assert result.v[theta_e > 0.5].max() <= L_PATH.profile.speed  # v_min / sin(0.5) = 0.42
+    assert ARRIVAL_OUTCOMES[controller.outcome] == 'arrived'
+    assert controller.position_error <= controller.config.goal_tolerance
+    assert abs(controller.yaw_error) <= controller.config.yaw_tolerance
+
+
 def test_below_v_min_only_on_a_reference_slower_than_v_min():
     paper = run(robot_dlsmc(), L_PATH, margin=0.0)
     assert paper.v.min() >= InputLimits().v_min  # the paper's floor, even at rest
@@ -74,9 +98,13 @@ def test_below_v_min_only_on_a_reference_slower_than_v_min():
     moving = arriving.telemetry['arrival'] == 0.0
     speed = np.hypot(arriving.reference[:, 2], arriving.reference[:, 3])
     assert arriving.v[moving].min() < 0.05
-    # Below v_min only where the reference itself is slower than that.
-    below = moving & (arriving.v < InputLimits().v_min - 1e-12)
-    assert np.all(arriving.v[below] >= speed[below] - 1e-12)
+    # Below v_min only where the reference itself is slower than that, times the share of
+    # the heading along theta_d (align_speed on a path, doc/design.md, D27).
+    v_min = InputLimits().v_min
+    below = moving & (arriving.v < v_min - 1e-12)
+    floor = np.minimum(speed, v_min) * np.cos(arriving.telemetry['theta_e'])
+    assert np.all(arriving.v[below] >= floor[below] - 1e-12)
+    assert np.abs(arriving.telemetry['theta_e'][below]).max() < 1e-3  # cos > 1 - 5e-7
 
 
 @pytest.mark.parametrize('name', CONTROLLER_NAMES)
@@ -173,6 +201,44 @@ def test_path_parameters_name_what_is_wrong():
                                 'trajectory.path.file': 'paths/warehouse_loop.csv'})
     assert params.trajectory.profile.omega_max == 1.2  # a shipped path by its config/ name
     assert params.arrival == ArrivalConfig()
+
+
+def test_a_path_that_never_leaves_the_goal_tolerance_is_refused(tmp_path):
+    # The arrival is judged once the reference has been farther than goal_tolerance from
+    # the goal: a path 3 mm long (default tolerance 5 mm), or a tolerance of 50 m on the
+    # warehouse loop (9.1 m from its goal at most), would run for ever.
+    short = tmp_path / 'short.csv'
+    short.write_text('x,y\n0,0\n0.003,0\n')
+    with pytest.raises(ParameterError, match=r'trajectory.path.goal_tolerance = 0.005 m: '
+                                             r'must be less than the farthest the path gets '
+                                             r'from its last point \(0.003 m\)'):
+        controller_params({'trajectory.name': 'path', 'trajectory.path.file': str(short)})
+    with pytest.raises(ParameterError, match=r'goal_tolerance = 50.0 m: .* \(9.1 m\)'):
+        controller_params({'trajectory.name': 'path', 'trajectory.path.goal_tolerance': 50.0,
+                           'trajectory.path.file': 'paths/warehouse_loop.csv'})
+    controller_params({'trajectory.name': 'path', 'trajectory.path.goal_tolerance': 9.0,
+                       'trajectory.path.file': 'paths/warehouse_loop.csv'})  # it leaves it
+    # Given while running (a planner's path): refused, the previous reference kept.
+    from nfmr_dlsmc.runtime.tracking_session import TrackingSession
+    session = TrackingSession(controller_params(load_params_file(ROBOT)), odom_timeout=1.0)
+    with pytest.raises(PathError, match=r'farthest the path gets from its last point '
+                                        r'\(0.003 m\)'):
+        session.path_reference([(0.0, 0.0), (0.003, 0.0)])
+    assert session.path_reference([(0.0, 0.0), (0.03, 0.0)]).length == pytest.approx(0.03)
+
+
+def test_a_run_that_ends_before_the_path_says_so_in_the_table():
+    # nfmr-eval --path warehouse_loop.csv --duration 10: the path takes 38.9 s.
+    evaluation = load_evaluation('kinematic', 'dlsmc', None, 10.0, 'none', ROBOT,
+                                 path='config/paths/warehouse_loop.csv')
+    result, _ = evaluate(evaluation, PATH_HOLD_FROM)
+    early = evaluation.trajectory.duration - 10.0
+    assert result['arrival'] == (f'not finished: the run ended {early:.1f} s before the '
+                                 "path's end")
+    assert result['arrival_time'] is None
+    lines = format_table(result, None).splitlines()
+    (row,) = [line for line in lines if line.startswith('end of the path')]
+    assert row.endswith(result['arrival'])
 
 
 def nfmr_eval(*args):

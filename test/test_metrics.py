@@ -2,6 +2,7 @@
 
 import math
 
+from nfmr_dlsmc.analysis.run_metrics import metrics_table
 from nfmr_dlsmc.core.metrics import (
     convergence_time,
     error_criteria,
@@ -168,3 +169,49 @@ def test_total_variation_rate_and_sample_durations():
     np.testing.assert_allclose(sample_durations([0.0, 1.0, 3.0, 4.0, 4.5]),
                                [1.0, 2.0, 1.0, 0.5, 1.0])
     np.testing.assert_array_equal(sample_durations([5.0]), [0.0])
+
+
+def _path_run(x_d, outcome, path_end=None, goal=(6.0, 0.0, 0.0)):
+    """Return the metrics of a run along x, 1 s a sample, the robot on its reference."""
+    t = np.arange(float(len(x_d)))
+    x_d = np.asarray(x_d, dtype=float)
+    zero = np.zeros_like(t)
+    return tracking_metrics(t, x_d, zero, zero, x_d, zero, zero, zero, zero + 1.0, zero,
+                            1.0, outcome=np.asarray(outcome, dtype=float), goal=goal,
+                            path_end=path_end)
+
+
+def test_a_path_run_always_says_how_it_ended():
+    # The reference reaches the goal at x = 6 m at t = 6 s and rests there to t = 10 s.
+    resting = np.minimum(np.arange(11.0), 6.0)
+    late = _path_run(resting, np.zeros(11))
+    assert late.arrival == ("not finished: the run ended 4.0 s after the path's end, "
+                            'the robot not arrived')
+    assert late.arrival_time is None and late.arrival_position_error is None
+    # Ended 3 s before the path's end (its duration known), or unknown: still moving.
+    early = np.arange(5.0)
+    assert _path_run(early, np.zeros(5), path_end=7.0).arrival == (
+        "not finished: the run ended 3.0 s before the path's end")
+    assert _path_run(early, np.zeros(5)).arrival == (
+        "not finished: the run ended before the path's end")
+    # A loop starts at its goal: only its return counts as the path's end (t = 12 s).
+    loop = np.concatenate([np.arange(6.0, -1.0, -1.0), np.arange(1.0, 7.0), [6.0, 6.0]])
+    assert _path_run(loop, np.zeros(15)).arrival.startswith('not finished: the run ended '
+                                                            "2.0 s after the path's end")
+    ended = _path_run(resting, [0.0] * 7 + [1.0] * 4)
+    assert ended.arrival == 'arrived' and ended.arrival_time == 7.0
+    assert _path_run(resting, np.zeros(11), goal=None).arrival is None  # no path
+
+
+def test_the_metrics_table_has_an_end_of_the_path_row_for_every_path_run():
+    resting = np.minimum(np.arange(11.0), 6.0)
+    arrived = _path_run(resting, [0.0] * 7 + [1.0] * 4)
+    early = _path_run(np.arange(5.0), np.zeros(5), path_end=7.0)
+    table = metrics_table([('ROS pybullet', arrived), ('kinematic', early)]).splitlines()
+    (row,) = [line for line in table if line.startswith('end of the path')]
+    assert row.split()[-3:] == ['arrived', 'not', 'finished']
+    assert table[-1] == "kinematic: not finished: the run ended 3.0 s before the path's end"
+    alone = metrics_table([('kinematic', early)]).splitlines()
+    assert any(line.startswith('end of the path') for line in alone)  # none arrived
+    no_path = _path_run(resting, np.zeros(11), goal=None)
+    assert 'end of the path' not in metrics_table([('kinematic', no_path)])

@@ -22,8 +22,6 @@ from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.long
-
 DT = 0.001
 R1, R2, R3 = 23 / 33, 17 / 33, 17 / 33
 ROBOT_FILE = 'config/robot_case1.yaml'
@@ -170,9 +168,34 @@ def test_align_speed_scales_the_paper_speed_by_the_cosine_of_theta_e(heading_err
         assert v == limits.v_min  # facing away: it turns at the least speed
 
 
+def test_on_a_path_align_speed_turns_on_the_spot_and_the_sliding_variables_wait():
+    # follow_slow_reference (a path, D27): facing away, v = 0 even where the reference
+    # moves faster than v_min, and the outer loop's sliding variables stay at 0 while the
+    # reference runs away; a radian off, the speed across theta_d is v_min, not |u| cos 1.
+    path = DlsmcController(DlsmcConfig(align_speed=True))
+    path.follow_slow_reference = True
+    for k in range(100):  # the reference leaves along x at 0.5 m/s, the robot faces back
+        v, omega = path.step(0.0, 0.0, math.pi, 0.0005 * k, 0.0, 0.5, 0.0)
+        assert v == 0.0 and abs(omega) > 1.0
+    assert path.outer.s_x == pytest.approx(0.0, abs=1e-15) and path.outer.s_y == 0.0
+    paper = DlsmcController(DlsmcConfig(align_speed=True))
+    paper.step(0.0, 0.0, math.pi, 0.0, 0.0, 0.5, 0.0)
+    for k in range(1, 100):
+        paper.step(0.0, 0.0, math.pi, 0.0005 * k, 0.0, 0.5, 0.0)
+    assert paper.outer.s_x < -0.05  # wound up: e - e(0) + C int alpha(e)
+    path.reset()
+    theta = 1.0  # theta_d is 0 here: the reference 0.5 m ahead along x
+    v, _ = path.step(-0.5, 0.0, theta, 0.0, 0.0, 0.5, 0.0)
+    limits = path.config.limits
+    assert path.s_theta == pytest.approx(theta, abs=1e-12)
+    assert path.v_raw * math.cos(theta) > 0.5  # the share along the heading: 0.59 m/s
+    assert v == pytest.approx(limits.v_min / math.sin(theta), rel=1e-12)  # 0.24 m/s
+
+
 # -- the analytic thetadot_d ------------------------------------------------------------
 
 
+@pytest.mark.long
 def test_input_rate_is_the_time_derivative_of_the_outer_law():
     # Drive the outer loop along a smooth error path inside and outside the linear zone and
     # compare (u_x', u_y') with a central difference of the law's own output.
@@ -200,6 +223,7 @@ def test_input_rate_is_the_time_derivative_of_the_outer_law():
     assert np.max(np.abs(rates[1:-1][smooth])) > 0.1  # the comparison is not all zeros
 
 
+@pytest.mark.long
 def test_analytic_thetadot_d_matches_the_rate_of_theta_d_in_closed_loop():
     params = robot_params()
     run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 4.0, 0.0), 30.0)
@@ -214,6 +238,7 @@ def test_analytic_thetadot_d_matches_the_rate_of_theta_d_in_closed_loop():
 # -- the profile in closed loop on the kinematic model ----------------------------------
 
 
+@pytest.mark.long
 def test_robot_profile_meets_its_kinematic_targets_in_case1():
     params = robot_params()
     m = simulation_metrics(simulate(DlsmcController(params.dlsmc), params.trajectory,
@@ -225,6 +250,7 @@ def test_robot_profile_meets_its_kinematic_targets_in_case1():
     assert m.hold_theta_e_max < 1e-3
 
 
+@pytest.mark.long
 def test_paper_law_chatters_where_the_profile_does_not():
     # The same start on the paper's law: omega alternates limit to limit once converged.
     m = simulation_metrics(simulate(DlsmcController(), make_trajectory('sine'),
@@ -232,6 +258,7 @@ def test_paper_law_chatters_where_the_profile_does_not():
     assert m.hold_omega_tv > 100.0 and m.hold_omega_saturated > 0.1
 
 
+@pytest.mark.long
 @pytest.mark.parametrize('name, x0', [('circle', (0.5, -0.5, 0.0)), ('line', (-1.0, 1.0, 1.0)),
                                       ('lemniscate', (1.0, -1.0, 0.5)), ('sine', (4.0, 1.0, 0.0))])
 def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
@@ -245,6 +272,7 @@ def test_robot_profile_holds_other_trajectories_and_starts(name, x0):
     assert m.hold_omega_tv < 0.1 and m.hold_omega_saturated == 0.0
 
 
+@pytest.mark.long
 def test_align_speed_brings_the_robot_back_where_the_paper_speed_circles():
     # From this start the paper's speed passes the reference a radian off and circles round
     # it for half a minute at omega_max (the outer loop's, on the kinematic model too);
@@ -263,6 +291,7 @@ def test_align_speed_brings_the_robot_back_where_the_paper_speed_circles():
     assert figures[True].hold_omega_saturated == 0.0
 
 
+@pytest.mark.long
 def test_robot_profile_holds_the_band_through_the_case2_pulse_on_the_kinematic_model():
     params = robot_params()
     run = simulate(DlsmcController(params.dlsmc), params.trajectory, (1.0, 1.0, math.pi / 6),

@@ -156,3 +156,31 @@ def test_messages_survive_serialisation():
     ]
     for message, kind in messages:
         assert deserialize_message(serialize_message(message), kind) == message
+
+
+def test_a_bag_tells_the_goal_of_a_path_run_that_arrived_or_whose_reference_came_to_rest():
+    # nfmr-analyze reports how a run along a path ended: the goal is the last pose of the
+    # recorded reference path, once the run ended at it, or once its reference rests there
+    # (the robot not arrived); a run cut before the path's end cannot be told from one
+    # along a trajectory without an end.
+    from nfmr_dlsmc.bag.reader import BagContents, BagMessage
+    from nfmr_dlsmc.core.path_reference import PathTrajectory
+    from nfmr_dlsmc.ros.run_series import path_goal, REFERENCE_PATH_TOPIC
+
+    def recorded(trajectory, horizon):
+        message = serialize_message(reference_path(trajectory, horizon, 0.1, STAMP))
+        return BagContents('run.mcap', [BagMessage(REFERENCE_PATH_TOPIC, 'nav_msgs/msg/Path',
+                                                   0, 0, message)])
+
+    path = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (2.0, 1.0)])
+    t = np.arange(0.0, path.duration + 2.0, 0.01)
+    x_d, y_d, _, _ = path.sample(t)
+    series = {'x_d': x_d, 'y_d': y_d, 'arrival': np.zeros_like(t)}
+    assert path_goal(recorded(path, t[-1]), series) == pytest.approx(path.end_pose)
+    early = {key: value[t < 2.0] for key, value in series.items()}
+    assert path_goal(recorded(path, 2.0), early) is None
+    arrived = {**early, 'arrival': np.append(np.zeros(len(early['x_d']) - 1), 1.0)}
+    assert path_goal(recorded(path, 2.0), arrived) is not None
+    sine = make_trajectory('sine')
+    x_d, y_d, _, _ = sine.sample(t)
+    assert path_goal(recorded(sine, t[-1]), {**series, 'x_d': x_d, 'y_d': y_d}) is None

@@ -6,7 +6,7 @@ processes), while this test asks the controller and the sim for their state and 
 every 0.2 s: every call is answered within the bound doc/nodes.md gives, the launcher's
 ``deactivate`` too, and the run ends with exit 0. Judged on the path, not on the clock: the
 run may be slower than real time, but the robot holds the path as on an idle machine
-(design D27).
+(design D28).
 """
 
 import os

@@ -1,6 +1,9 @@
 """The pybullet chassis world, stepped in DIRECT mode."""
 
 import math
+import os
+import subprocess
+import sys
 
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
@@ -31,6 +34,30 @@ def run(world, v, omega, mode, seconds, crab_angle=0.0):
 def mean_of(outputs, getter, last_seconds=1.0, dt=0.001):
     tail = outputs[-int(last_seconds / dt):]
     return float(np.mean([getter(o) for o in tail]))
+
+
+def test_connecting_prints_no_pybullet_banner(capfd):
+    # pybullet's connect prints argv[0]= on standard output; a command's terminal and its
+    # --json carry only what the command prints.
+    with ChassisWorld():
+        pass
+    out, err = capfd.readouterr()
+    assert 'argv[0]=' not in out and 'argv[0]=' not in err
+
+
+def test_the_banner_is_not_left_in_a_buffer_for_the_end_of_the_process():
+    # The C library buffers standard output to a pipe or a file (without PYTHONUNBUFFERED,
+    # as in a user's shell): the banner was written at the process's exit, after the
+    # report of `nfmr-run | tee run.txt` or `nfmr-eval --json > out.json`.
+    env = {k: v for k, v in os.environ.items() if k != 'PYTHONUNBUFFERED'}
+    script = ('from nfmr_sim.world import ChassisWorld\n'
+              'with ChassisWorld():\n    pass\n'
+              "print('the report')\n")
+    proc = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == 'the report\n'
+    assert 'argv[0]=' not in proc.stderr
 
 
 def test_joint_names_say_which_wheel():

@@ -148,7 +148,7 @@ def _run_start(task: tuple) -> dict:
         keys = RUN_KEYS
     else:
         keys = PATH_RUN_KEYS
-        figures['outcome'] = _OUTCOME_CODES[figures['arrival']]
+        figures['outcome'] = _OUTCOME_CODES.get(figures['arrival'], 0.0)
     return {key: math.nan if figures[key] is None else float(figures[key]) for key in keys}
 
 

@@ -72,7 +72,8 @@ def with_ground_truth(series: dict, truth: tuple | None) -> dict:
 
 
 def state_metrics(series: dict, hold_from: float = HOLD_FROM,
-                  joint_rates: tuple | None = None, goal=None) -> TrackingMetrics:
+                  joint_rates: tuple | None = None, goal=None,
+                  path_end: float | None = None) -> TrackingMetrics:
     """
     Return the :func:`~nfmr_dlsmc.core.metrics.tracking_metrics` of the ticks of a run.
 
@@ -82,7 +83,9 @@ def state_metrics(series: dict, hold_from: float = HOLD_FROM,
     the state carried them have no steer figure) and, with ``joint_rates`` (stamps [s],
     steer joint velocities (N, 4) [rad/s]), the measured steer joint rates stamped at or
     after ``hold_from`` (sim time, which starts with trajectory time within a step). With
-    ``goal`` (a path's last pose) and the state's ``arrival``, the arrival figures.
+    ``goal`` (a path's last pose) and the state's ``arrival``, the arrival figures, and with
+    ``path_end`` (the path's duration [s]) how long before or after its end a run that did
+    not end stopped.
     """
     series, _ = last_segment(series)
     keep = series['stopped'] == 0.0
@@ -93,7 +96,7 @@ def state_metrics(series: dict, hold_from: float = HOLD_FROM,
                                s['theta_d'], s['theta_r'], s['v'], s['omega'],
                                sample_durations(s['t']), hold_from, s.get('omega_saturated'),
                                steer, None, s.get('arrival') if goal is not None else None,
-                               goal)
+                               goal, path_end)
     if joint_rates is not None:
         stamps, rates = joint_rates
         after = stamps >= hold_from
@@ -123,7 +126,10 @@ def metrics_table(columns: list) -> str:
     """
     Return a text table, one column per (label, TrackingMetrics).
 
-    The hold rows cover t >= the first column's ``hold_from``.
+    The hold rows cover t >= the first column's ``hold_from``. Along a path, the row ``end
+    of the path`` says how each run ended; a run that did not end says ``not finished``
+    there, and why below the table (e.g. ``kinematic: not finished: the run ended 12.3 s
+    before the path's end``).
     """
     width = max([12] + [len(label) for label, _ in columns])
     hold_from = columns[0][1].hold_from if columns else HOLD_FROM
@@ -133,10 +139,12 @@ def metrics_table(columns: list) -> str:
         cells = [f' {format_metric(getattr(metrics, key)):>{width}}' for _, metrics in columns]
         lines.append(f'{row:<40}' + ''.join(cells))
     if any(metrics.arrival for _, metrics in columns):  # a path: how each run ended
+        ends = [(label, (metrics.arrival or '—').partition(': ')) for label, metrics in columns]
         lines.append(f"{'end of the path':<40}" + ''.join(
-            f" {metrics.arrival or '—':>{width}}" for _, metrics in columns))
+            f' {outcome:>{width}}' for _, (outcome, _, _) in ends))
         for row, key in ARRIVAL_ROWS:
             cells = [f' {format_metric(getattr(metrics, key)):>{width}}'
                      for _, metrics in columns]
             lines.append(f'{row:<40}' + ''.join(cells))
+        lines += [f'{label}: {outcome}: {why}' for label, (outcome, _, why) in ends if why]
     return '\n'.join(lines)

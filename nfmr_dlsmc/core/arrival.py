@@ -35,6 +35,12 @@ robot a few millimetres off would turn around it. :class:`ArrivingController` wr
 
 Whichever ends the run, :attr:`ArrivingController.outcome` says which, the next steps
 command zero, and :meth:`~ArrivingController.reset` starts over (a new reference).
+
+Since the arrival is judged only once the reference has been farther than
+``goal_tolerance`` from the goal, a path that never gets that far from its last point (one
+shorter than the tolerance, or a tolerance larger than the path) would never end:
+:func:`goal_reach` is what the parameters and a path given while running are checked
+against (:func:`check_goal_reach`).
 """
 
 from dataclasses import dataclass
@@ -42,9 +48,11 @@ import math
 from typing import ClassVar
 
 from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
+from nfmr_dlsmc.core.validation import ParameterError
+import numpy as np
 
 __all__ = ['ARRIVAL_OUTCOMES', 'ArrivalConfig', 'ArrivingController', 'FINAL_SHARE',
-           'with_arrival']
+           'REACH_SAMPLES', 'check_goal_reach', 'goal_reach', 'with_arrival']
 
 #: Values of the telemetry field ``arrival``: the run goes on (0) or how it ended.
 ARRIVAL_OUTCOMES = {0.0: 'tracking', 1.0: 'arrived', 2.0: 'passed the goal',
@@ -60,6 +68,9 @@ FINAL_SHARE = 0.5
 #: so to meet a reference behind it they would turn round, and a chassis that brakes later
 #: than a reference slowing to rest at the goal is ahead of it by millimetres.
 WAIT_SHARE = 0.5
+#: Points along a path at which :func:`goal_reach` measures it [-]: every 1/1000 of its
+#: length, so the reach it gives is short of the true one by 1/2000 of the length at most.
+REACH_SAMPLES = 1001
 
 
 @documented
@@ -240,3 +251,37 @@ def with_arrival(controller, trajectory, config: ArrivalConfig | None):
     if goal is None or config is None:
         return controller
     return ArrivingController(controller, goal, config)
+
+
+def goal_reach(trajectory) -> float:
+    """
+    Return the farthest a path's reference gets from its last point [m].
+
+    ``trajectory`` is a :class:`~nfmr_dlsmc.core.path_reference.PathTrajectory`; measured
+    at :data:`REACH_SAMPLES` points evenly along its length.
+    """
+    gx, gy, _ = trajectory.end_pose
+    x, y, _, _ = trajectory.geometry(np.linspace(0.0, trajectory.length, REACH_SAMPLES))
+    return float(np.max(np.hypot(x - gx, y - gy)))
+
+
+def check_goal_reach(trajectory, config: ArrivalConfig) -> None:
+    """
+    Refuse a path along which the arrival rule could never end the run.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``trajectory.path.goal_tolerance`` when :func:`goal_reach` of ``trajectory``
+        is not more than it: the arrival is judged once the reference has been farther
+        than ``goal_tolerance`` from the goal, which along this path it never is.
+
+    """
+    reach = goal_reach(trajectory)
+    if reach <= config.goal_tolerance:
+        raise ParameterError(
+            f'{ArrivalConfig.prefix}.goal_tolerance', config.goal_tolerance,
+            f'must be less than the farthest the path gets from its last point '
+            f'({reach:.3g} m): the arrival is judged once the reference has been farther '
+            'than goal_tolerance from it, so the run would never end (a path shorter than '
+            'the tolerance, or a tolerance larger than the path)', 'm')

@@ -35,7 +35,13 @@ class CascadeController(SaturatedController):
        reference's speed with ``follow_slow_reference``); with ``align_speed`` the speed
        saturated is v = sqrt(u_x^2 + u_y^2) max(cos(s_theta), 0) instead (robot option,
        doc/design.md, D24): the robot slows down, and so turns on a tighter circle, while
-       its heading is far from theta_d;
+       its heading is far from theta_d. With ``follow_slow_reference`` too (a path,
+       doc/design.md, D27) the robot turns first: the lower bound is scaled by
+       max(cos(s_theta), 0) as well (facing away, v = 0: it turns on the spot), its speed
+       across theta_d, v abs(sin(s_theta)), is at most ``limits.v_min`` (v <= v_min /
+       abs(sin(s_theta))), and the outer loop's sliding variables move by the same share
+       of the next step only (``outer.advance``, which the outer loop must have), so that
+       they do not wind up while the robot turns;
     6. optionally (``omega_tau`` > 0) a first-order low-pass of omega from the second step
        on, time constant ``omega_tau`` (1 - abs(s_theta) / ``omega_band``) [s] (none from
        abs(s_theta) >= ``omega_band`` [rad] on).
@@ -131,7 +137,17 @@ class CascadeController(SaturatedController):
         s_theta = math.remainder(theta - theta_d, _TWO_PI)
         if s_theta == -math.pi:
             s_theta = math.pi
-        v_want = v_raw * max(math.cos(s_theta), 0.0) if self._align else v_raw
+        if self._align:
+            share = max(math.cos(s_theta), 0.0)
+            v_want = v_raw * share
+            if self.follow_slow_reference:  # on a path: turn first (step 5, D27)
+                v_min *= share
+                across = abs(math.sin(s_theta))  # v across theta_d at most limits.v_min
+                if v_want * across > limits.v_min:
+                    v_want = limits.v_min / across
+                self.outer.advance = share
+        else:
+            v_want = v_raw
         v = v_min if v_want < v_min else (limits.v_max if v_want > limits.v_max else v_want)
         # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
         if self._analytic:

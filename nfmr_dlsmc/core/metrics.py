@@ -17,9 +17,9 @@ import numpy as np
 __all__ = ['ARRIVAL_ROWS', 'COARSE_TOLERANCE', 'CONVERGENCE_TOLERANCE', 'ErrorCriteria',
            'HOLD_FROM', 'HOLD_ROWS', 'METRIC_LABELS', 'PATH_HOLD_FROM', 'TrackingMetrics',
            'convergence_time', 'error_criteria', 'finite_or_none', 'format_metric',
-           'hold_metrics', 'metric_rows',
+           'hold_metrics', 'metric_rows', 'reference_rest_time',
            'sample_durations', 'simulation_metrics', 'total_variation_rate',
-           'tracking_metrics']
+           'tracking_metrics', 'unfinished']
 
 #: Distance error below which the robot counts as on the trajectory (section 4.2) [m].
 CONVERGENCE_TOLERANCE = 1e-3
@@ -157,10 +157,12 @@ class TrackingMetrics:
         Largest measured steer joint rate [rad/s] (plants with steer joints).
 
     Arriving at the end of a path (:mod:`nfmr_dlsmc.core.arrival`; None for a reference
-    without an end, or where the run did not end):
+    without an end, and, all but ``arrival``, where the run did not end):
 
     arrival : str or None
-        How the run ended (``arrived``, ``passed the goal``, ``goal timeout``).
+        How the run ended (``arrived``, ``passed the goal``, ``goal timeout``), or that it
+        did not (:func:`unfinished`: ``not finished: the run ended 12.3 s before the path's
+        end``); None without a path.
     arrival_time : float or None
         When it ended [s].
     arrival_position_error, arrival_yaw_error : float or None
@@ -262,18 +264,50 @@ def hold_metrics(t, distance, theta_e, omega, dt, hold_from: float = HOLD_FROM,
     return figures
 
 
-def arrival_metrics(t, x, y, theta, outcome, goal) -> dict:
+def unfinished(t_end: float, path_end: float | None) -> str:
+    """
+    Return how a run along a path that never ended by the arrival rule ended.
+
+    ``t_end`` is the run's last sample [s], ``path_end`` the time at which the path's
+    reference comes to rest at its goal [s] (None: unknown, the reference was still
+    moving at the end of the run).
+    """
+    if path_end is None:
+        return "not finished: the run ended before the path's end"
+    if t_end < path_end:
+        return f"not finished: the run ended {path_end - t_end:.1f} s before the path's end"
+    return (f"not finished: the run ended {t_end - path_end:.1f} s after the path's end, "
+            'the robot not arrived')
+
+
+def reference_rest_time(t, x_d, y_d, goal) -> float | None:
+    """
+    Return when the reference came to rest at ``goal`` for good [s], None if it did not.
+
+    A path's reference is exactly its last point from its end on
+    (:meth:`~nfmr_dlsmc.core.path_reference.PathTrajectory.sample`): the first sample from
+    which it stays there; a loop's start there does not count.
+    """
+    gx, gy, _ = goal
+    away = np.flatnonzero((np.asarray(x_d) != gx) | (np.asarray(y_d) != gy))
+    if away.size and away[-1] == len(t) - 1:
+        return None
+    return float(t[away[-1] + 1]) if away.size else float(t[0])
+
+
+def arrival_metrics(t, x, y, theta, outcome, goal, path_end: float | None = None) -> dict:
     """
     Return the ``arrival*`` fields of :class:`TrackingMetrics` (see there) as a dict.
 
     ``outcome`` is the controller's ``arrival`` telemetry
     (:data:`~nfmr_dlsmc.core.arrival.ARRIVAL_OUTCOMES`), ``goal`` the reference's last pose
-    (x [m], y [m], heading [rad]).
+    (x [m], y [m], heading [rad]). A run that never ended by the arrival rule has only
+    ``arrival``, :func:`unfinished` of its last sample and ``path_end`` [s].
     """
     outcome = np.asarray(outcome, dtype=float)
     ended = np.flatnonzero(outcome != 0.0)
     if ended.size == 0:
-        return {}
+        return {'arrival': unfinished(float(t[-1]), path_end)}
     k = ended[0]
     gx, gy, gyaw = goal
     return {'arrival': ARRIVAL_OUTCOMES[float(outcome[k])], 'arrival_time': float(t[k]),
@@ -283,7 +317,8 @@ def arrival_metrics(t, x, y, theta, outcome, goal) -> dict:
 
 def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
                      hold_from: float = HOLD_FROM, omega_saturated=None, steer=None,
-                     steer_joint_velocity=None, outcome=None, goal=None) -> TrackingMetrics:
+                     steer_joint_velocity=None, outcome=None, goal=None,
+                     path_end: float | None = None) -> TrackingMetrics:
     """
     Compute :class:`TrackingMetrics` from time series sampled every ``dt`` [s].
 
@@ -305,9 +340,10 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
         Sampling period [s], or each sample's duration (:func:`sample_durations`).
     hold_from, omega_saturated, steer, steer_joint_velocity
         For the hold figures, see :func:`hold_metrics`.
-    outcome, goal
+    outcome, goal, path_end
         For the arrival figures (a path), see :func:`arrival_metrics`; the hold window then
-        ends when the run did.
+        ends when the run did. ``path_end`` (the path's duration [s]) defaults to when the
+        reference came to rest at the goal (:func:`reference_rest_time`).
 
     """
     t = np.asarray(t, dtype=float)
@@ -318,8 +354,12 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
     th_e = error_criteria(theta_e, dt)
     th_r = error_criteria(theta_r_error, dt)
     t_conv = convergence_time(t, distance)
-    arrival = ({} if outcome is None or goal is None
-               else arrival_metrics(t, x, y, theta, outcome, goal))
+    if outcome is None or goal is None:
+        arrival = {}
+    else:
+        if path_end is None:
+            path_end = reference_rest_time(t, x_d, y_d, goal)
+        arrival = arrival_metrics(t, x, y, theta, outcome, goal, path_end)
     if t_conv is None:
         after_theta = after_tv = None
     else:
@@ -340,20 +380,22 @@ def tracking_metrics(t, x, y, theta, x_d, y_d, theta_d, theta_r, v, omega, dt,
         **arrival)
 
 
-def simulation_metrics(result, hold_from: float = HOLD_FROM, goal=None) -> TrackingMetrics:
+def simulation_metrics(result, hold_from: float = HOLD_FROM, goal=None,
+                       path_end: float | None = None) -> TrackingMetrics:
     """
     Return the :func:`tracking_metrics` of a :class:`~nfmr_dlsmc.plants.kinematic.SimResult`.
 
     With its saturation flags, commanded steer angles and measured steer joint rates where
-    the controller and the plant have them, and with ``goal`` (a path's last pose) the
-    arrival figures of a controller that reports ``arrival``.
+    the controller and the plant have them, and with ``goal`` (a path's last pose) and
+    ``path_end`` (its duration [s]) the arrival figures of a controller that reports
+    ``arrival``.
     """
     return tracking_metrics(
         result.t, result.state[:, 0], result.state[:, 1], result.state[:, 2],
         result.reference[:, 0], result.reference[:, 1], result.telemetry['theta_d'],
         result.theta_r, result.v, result.omega, result.dt, hold_from,
         result.telemetry.get('omega_saturated'), result.steer, result.steer_joint_velocity,
-        result.telemetry.get('arrival'), goal)
+        result.telemetry.get('arrival'), goal, path_end)
 
 
 def format_metric(value) -> str:

@@ -93,6 +93,12 @@ class BtintsmcOuterLoop:
     alpha has a linear segment around 0 (robot profile, see
     :func:`~nfmr_dlsmc.core.sliding_functions.bounded_rate`).
 
+    :attr:`advance` < 1 (set by the cascade: a robot facing away from theta_d on a path,
+    doc/design.md, D27) moves the sliding variables by that share of a step only,
+    s' = advance (e' + C alpha(e)): e(0) takes up the rest of the error's change and the
+    integral only that share of alpha, so s does not wind up while the robot, turning, cannot
+    follow; 1 (the paper, and after :meth:`reset`) is eq. (32) exactly.
+
     Attributes (after a step)
     -------------------------
     C1, C2 : float
@@ -101,11 +107,16 @@ class BtintsmcOuterLoop:
         Sliding variables [m].
     alpha_x, alpha_y : float
         alpha(x_e), alpha(y_e) of eq. (33) [-].
+
+    Attributes (set before a step)
+    ------------------------------
+    advance : float
+        Share [0, 1] of the next step by which the sliding variables move (1: eq. 32).
     """
 
     __slots__ = ('_gains', '_r2', '_r3', '_started', '_ex0', '_ey0', '_int_ax', '_int_ay',
                  '_adaptive', '_zone', '_x_e', '_y_e', 'C1', 'C2', 's_x', 's_y', 'alpha_x',
-                 'alpha_y')
+                 'alpha_y', 'advance')
 
     def __init__(self, gains: OuterLoopGains):
         self._started = False
@@ -146,6 +157,7 @@ class BtintsmcOuterLoop:
         self.s_y = 0.0
         self.alpha_x = 0.0
         self.alpha_y = 0.0
+        self.advance = 1.0
 
     def step(self, x_e: float, y_e: float, xdot_d: float, ydot_d: float,
              dt: float) -> tuple[float, float]:
@@ -165,8 +177,12 @@ class BtintsmcOuterLoop:
         """Advance the integrals of eq. (32) and return (s_x, s_y) [m]; sets alpha_x, alpha_y."""
         g = self._gains
         if self._started:
-            self._int_ax += self.alpha_x * dt
-            self._int_ay += self.alpha_y * dt
+            advance = self.advance
+            self._int_ax += advance * self.alpha_x * dt
+            self._int_ay += advance * self.alpha_y * dt
+            if advance != 1.0:  # e(0) takes up the rest of the error's change
+                self._ex0 += (1.0 - advance) * (x_e - self._x_e)
+                self._ey0 += (1.0 - advance) * (y_e - self._y_e)
         else:
             self._started = True
             self._ex0, self._ey0 = x_e, y_e
@@ -189,14 +205,15 @@ class BtintsmcOuterLoop:
             s_x' = x_e' + C1 alpha(x_e)                                (eq. 32)
             u_x' = x_d'' - k2 g'(s_x) s_x' - C1 alpha'(x_e) x_e',   g(s) = |s|^(q3/p3) erf(h s),
 
-        and likewise for y, with the reference acceleration (x_d'', y_d'') [m/s^2]. Needs a
-        finite slope of alpha at the current error: the paper's alpha (``linear_zone`` = 0)
-        has an infinite one at e = 0, where the alpha' term is taken as 0.
+        and likewise for y, with the reference acceleration (x_d'', y_d'') [m/s^2]; s' times
+        :attr:`advance`. Needs a finite slope of alpha at the current error: the paper's
+        alpha (``linear_zone`` = 0) has an infinite one at e = 0, where the alpha' term is
+        taken as 0.
         """
         g = self._gains
         r2, r3, h, k2 = self._r2, self._r3, g.h, g.k2
-        sdot_x = xdot_e + self.C1 * self.alpha_x
-        sdot_y = ydot_e + self.C2 * self.alpha_y
+        sdot_x = self.advance * (xdot_e + self.C1 * self.alpha_x)
+        sdot_y = self.advance * (ydot_e + self.C2 * self.alpha_y)
         slope_x = bounded_rate_slope(self._x_e, g.xi, r2, self._zone)
         slope_y = bounded_rate_slope(self._y_e, g.xi, r2, self._zone)
         if slope_x == math.inf:

@@ -52,7 +52,8 @@ class SaturatedController:
         False (the paper): v never goes below ``limits.v_min``. True, for a reference that
         starts or ends at rest (a path, :mod:`nfmr_dlsmc.core.path_reference`): where the
         reference is slower than v_min, its own speed is the lower bound instead, so that
-        the robot can start with it and come to a stop at its end.
+        the robot can start with it and come to a stop at its end. A cascade with
+        ``align_speed`` also turns first there (doc/design.md, D27).
 
     """
 

@@ -75,8 +75,9 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
     for note in run_notes(skipped, segments):
         print(f'nfmr-run: warning: {note}', file=sys.stderr)
     goal = getattr(params.trajectory, 'end_pose', None)
+    path_end = None if goal is None else params.trajectory.duration
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
-                                              steer_joint_rates(contents), goal))]
+                                              steer_joint_rates(contents), goal, path_end))]
     runs = [('ROS pybullet', series)]
     if not options.no_compare:
         print('the same scenario in this process: pybullet, then the kinematic model ...',
@@ -86,7 +87,7 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
                                       params.arrival)
             sim = plant_run(plant, controller, params, params.trajectory,
                             settings.initial_pose, options.duration, settings.world)
-            columns.append((label, simulation_metrics(sim, options.hold_from, goal)))
+            columns.append((label, simulation_metrics(sim, options.hold_from, goal, path_end)))
             plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
                        'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
                        'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}

@@ -14,12 +14,13 @@ commands since predicted), otherwise the latest odometry.
 from dataclasses import dataclass, replace
 import math
 
-from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival
+from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, check_goal_reach, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
+from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.params import ControllerParams, PATH
 import numpy as np
 
@@ -160,13 +161,19 @@ class TrackingSession:
         Raises
         ------
         PathError
-            For points that make no path, or a path whose first point is more than
-            ``max_start_distance`` from the robot's latest odometry.
+            For points that make no path, a path that never gets farther from its last
+            point than ``goal_tolerance`` (its run would never end:
+            :func:`~nfmr_dlsmc.core.arrival.check_goal_reach`), or a path whose first point
+            is more than ``max_start_distance`` from the robot's latest odometry.
 
         """
         profile = self.params.path_profile
         profile = replace(profile, start_speed=min(abs(self._v), profile.speed))
         reference = PathTrajectory.from_points(points, profile)
+        try:
+            check_goal_reach(reference, self.params.arrival)
+        except ParameterError as exc:
+            raise PathError(str(exc)) from None
         if self._pose is not None:
             x0, y0, _ = reference.start_pose
             distance = math.hypot(x0 - self._pose[0], y0 - self._pose[1])

@@ -20,7 +20,7 @@ In ``realtime`` mode the steps follow the wall clock (:class:`~nfmr_sim.realtime
 RealtimePacer`): a delay up to ``realtime_max_lag`` is caught up, a longer one slows the run
 down; no step is ever skipped, and how far the sim fell behind is logged. A step waits for a
 controller whose newest command is older than ``realtime_max_command_age`` in simulated
-time (design D27), so that a busy machine slows the run instead of leaving the robot
+time (design D28), so that a busy machine slows the run instead of leaving the robot
 uncontrolled.
 
 Services, in both modes: ``~/reset`` (std_srvs/Trigger) puts P back at ``initial_pose`` at
@@ -290,7 +290,7 @@ class SimNode(SchemaNode):
 
     def _wait_for_controller(self, max_age: float) -> bool:
         """
-        Realtime: wait until the newest command is at most ``max_age`` [s] old (D27).
+        Realtime: wait until the newest command is at most ``max_age`` [s] old (D28).
 
         Returns whether the step waited. A controller that let REALTIME_COMMAND_WAIT pass without a command is not waited for
         again until a fresh one comes.
