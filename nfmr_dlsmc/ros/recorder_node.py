@@ -18,8 +18,6 @@ from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
 from rclpy.clock import Clock as NodeClock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
-from rosgraph_msgs.msg import Clock
 
 
 def message_class(type_name: str):
@@ -58,7 +56,6 @@ class RecorderNode(Node):
         self._queue = queue.SimpleQueue()
         self._subscribed = {}
         self.received = 0
-        self.last_clock_ns = 0
         #: Why the bag stopped taking messages (a full disk), else None.
         self.failure = None
         for topic, type_name in known_topics.items():
@@ -94,16 +91,9 @@ class RecorderNode(Node):
         self.writer.add_topic(topic, type_name, profiles)
         put = self._queue.put
         clock = self.get_clock()
-        if topic == '/clock':
-            def callback(data, topic=topic):
-                # Simulated time from the message itself: the node clock may not have taken
-                # this tick yet.
-                stamp = deserialize_message(data, Clock).clock
-                self.last_clock_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
-                put((topic, clock.now().nanoseconds, data))
-        else:
-            def callback(data, topic=topic):
-                put((topic, clock.now().nanoseconds, data))
+
+        def callback(data, topic=topic):
+            put((topic, clock.now().nanoseconds, data))
         self._subscribed[topic] = self.create_subscription(
             message_class(type_name), topic, callback, qos, raw=True)
 
