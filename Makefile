@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.nfmr-installed
 
-.PHONY: setup run test test-slow test-all bench report docs clean mutate
+.PHONY: setup run test test-fast test-slow test-all bench report docs clean mutate
 
 setup: $(STAMP)
 
@@ -43,6 +43,10 @@ run: setup
 # both tiers, as CI runs them.
 test: setup
 	$(OWN) $(BIN)/python -m pytest -q -m 'not slow'
+
+# The edit loop: no node, no pybullet world, no command started, no long closed loop.
+test-fast: setup
+	$(OWN) $(BIN)/python -m pytest -q -m 'not ros and not sim and not commands and not long and not slow'
 
 test-slow: setup
 	$(OWN) $(BIN)/python -m pytest -q -m slow

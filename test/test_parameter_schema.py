@@ -159,8 +159,8 @@ def test_defaults_and_live_flags_of_the_nodes():
     assert not controller['inner.eps'].read_only and controller['geometry.wheelbase'].read_only
     sim = {p.name: p for p in NODES['sim']}
     live = {name for name, p in sim.items() if not p.read_only}
-    assert live == {'lockstep_timeout', 'realtime_max_lag', 'command_timeout',
-                    'aux_publish_every', 'max_time',
+    assert live == {'lockstep_timeout', 'realtime_max_lag', 'realtime_max_command_age',
+                    'command_timeout', 'aux_publish_every', 'max_time',
                     'marker_rate', 'motors.max_wheel_speed', 'disturbance.constant_force_x',
                     'disturbance.constant_force_y', 'disturbance.odom_position_noise',
                     'disturbance.odom_yaw_noise', 'disturbance.pulses'}

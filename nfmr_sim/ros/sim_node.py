@@ -292,8 +292,8 @@ class SimNode(SchemaNode):
         """
         Realtime: wait until the newest command is at most ``max_age`` [s] old (D28).
 
-        Returns whether the step waited. A controller that let REALTIME_COMMAND_WAIT pass without a command is not waited for
-        again until a fresh one comes.
+        Returns whether the step waited. A controller that let REALTIME_COMMAND_WAIT pass
+        without a command is not waited for again until a fresh one comes.
         """
         now = self.world.time
         if self.gate.wait_for_fresh_command(now, max_age, 0.0):
