@@ -260,6 +260,12 @@ class CommandGate:
 
     # -- outputs (called from the stepping thread) ------------------------------------------
 
+    @property
+    def has_commanded(self) -> bool:
+        """Whether a command came, valid or not: braking before it is no fault."""
+        with self._cond:
+            return self._last_valid is not None or self._fault_kind is not None
+
     def wait_for_step_command(self, timeout: float) -> bool:
         """
         Wait up to ``timeout`` wall seconds for this step's command (lockstep).

@@ -4,9 +4,11 @@ import math
 import threading
 import time
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME, status_figures
 from nfmr_sim.ros.sim_node import SimNode
 from nfmr_sim.sim_params import sim_parameters
 import numpy as np
@@ -47,6 +49,8 @@ class Driver(Node):
         self.create_subscription(Odometry, 'ground_truth', self.truth.append, DEEP_QOS)
         self.create_subscription(MarkerArray, 'robot_markers', self.markers.append, QOS)
         self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
+        self.stepping = []  # the sim's stepping counters from /diagnostics, by key
+        self.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, QOS)
         self.steer = self.create_publisher(Float64MultiArray,
                                            'steer_position_controller/commands', QOS)
         self.wheels = self.create_publisher(Float64MultiArray,
@@ -57,6 +61,11 @@ class Driver(Node):
         with self.new_odom:
             self.odom.append(msg)
             self.new_odom.notify_all()
+
+    def _on_diagnostics(self, msg):
+        figures = status_figures(msg, SIM_STATUS_NAME)
+        if figures is not None:
+            self.stepping.append(figures)
 
     def _on_log(self, msg):
         if msg.name == 'sim':
@@ -303,6 +312,12 @@ def test_commands_that_stop_arriving_brake_the_robot(ros_context):
         assert abs(driver.odom[-1].twist.twist.linear.x) < 0.05
         timeouts = [m for m in driver.logs if 'no valid command' in m]
         assert len(timeouts) == 1 and 'timeout 0.1 s' in timeouts[0]
+        # Counted for the end report, on /diagnostics (the braking before the first command
+        # is no fault): once.
+        steps = sim.steps
+        wait_for(lambda: driver.stepping and driver.stepping[-1]['steps'] >= steps,
+                 timeout=30.0)
+        assert driver.stepping[-1]['brakes'] == 1.0
     finally:
         stop(sim, driver, executor)
 

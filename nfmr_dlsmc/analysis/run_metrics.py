@@ -122,6 +122,36 @@ def loop_figures(windows: list) -> dict | None:
             'overruns': sum(w['overruns'] for w in windows), 'windows': len(windows)}
 
 
+def run_timing(real_time_factor: float, loop: dict | None, sim: dict | None) -> dict:
+    """
+    Return how a run kept its timing, from counters.
+
+    Parameters
+    ----------
+    real_time_factor : float
+        Simulated over wall time of the run [-].
+    loop : dict or None
+        The controller loop's figures (:func:`loop_figures`); None without a bag.
+    sim : dict or None
+        The sim's last stepping counters from ``/diagnostics`` (``behind_s``, ``slips``,
+        ``waits``, ``waited_s``, ``brakes``); None when none came (a sim of another source).
+
+    Returns
+    -------
+    dict
+        ``sim_real_time_factor``, ``sim_behind_s`` (the wall time the realtime sim gave
+        up), ``sim_waits`` and ``sim_waited_s`` (for a fresh command, D28),
+        ``controller_loop`` and ``sim_braked`` (how often the sim braked for want of a
+        valid command); the sim's figures are 0 without its counters.
+
+    """
+    sim = sim or {}
+    return {'sim_real_time_factor': real_time_factor,
+            'sim_behind_s': sim.get('behind_s', 0.0),
+            'sim_waits': int(sim.get('waits', 0)), 'sim_waited_s': sim.get('waited_s', 0.0),
+            'controller_loop': loop, 'sim_braked': int(sim.get('brakes', 0))}
+
+
 def metrics_table(columns: list) -> str:
     """
     Return a text table, one column per (label, TrackingMetrics).

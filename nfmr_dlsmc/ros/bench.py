@@ -169,7 +169,7 @@ def whole_run_figures(seconds: float) -> dict:
 
     In lockstep with and without recording, and in real time with recording, each for
     ``seconds`` of simulated time; return each run's ``timing.json`` by name
-    (:data:`WHOLE_RUNS`; :func:`~nfmr_dlsmc.ros.run_report.run_timing` says what it holds).
+    (:data:`WHOLE_RUNS`; :func:`~nfmr_dlsmc.analysis.run_metrics.run_timing` says what it holds).
 
     Raises
     ------

@@ -10,6 +10,8 @@ run's topics, and at the end waits for the recorder to take the last messages.
 
 import time
 
+from diagnostic_msgs.msg import DiagnosticArray
+from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME, status_figures
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
@@ -46,6 +48,12 @@ class ClockWatch:
         self.backwards = 0  # /clock messages earlier than the one before
         node.create_subscription(Clock, '/clock', self._on_clock,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        #: The sim's last stepping counters (:func:`~nfmr_dlsmc.ros.run_series.sim_stepping`).
+        self.sim_stepping = None
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        self.sim_stepping = status_figures(msg, SIM_STATUS_NAME) or self.sim_stepping
 
     def _on_clock(self, msg: Clock) -> None:
         ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec

@@ -24,6 +24,7 @@ import sys
 import time
 
 from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
+from nfmr_dlsmc.analysis.run_metrics import run_timing
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
@@ -40,7 +41,7 @@ from nfmr_dlsmc.ros.node_processes import (
     stop_children,
 )
 from nfmr_dlsmc.ros.recorder_node import RecorderNode
-from nfmr_dlsmc.ros.run_report import report_run, report_timing, run_timing
+from nfmr_dlsmc.ros.run_report import report_run, report_timing
 from nfmr_dlsmc.runtime.params import (
     check_odometry_timing,
     controller_params,
@@ -279,7 +280,7 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         report_run(bag_dir, run_dir, params, settings, options, writer.counts,
                    real_time_factor)
     elif status == 0:  # not recorded: the pace and the braking, without the loop's figures
-        report_timing(run_timing(real_time_factor, None, run_dir / 'sim.log'), run_dir)
+        report_timing(run_timing(real_time_factor, None, clock.sim_stepping), run_dir)
     if writer is not None:
         print(bag_dir)
     return status

@@ -5,12 +5,11 @@ Once the nodes have stopped and the bag is closed, :func:`report_run` reads the 
 measures the run next to the same scenario run in this process on the pybullet chassis
 (no ROS) and on the kinematic model, prints the table, writes the plots, prints and writes
 the timing and, if asked, the animation. A run that was not recorded reports its timing
-only (:func:`run_timing`, :func:`report_timing`).
+only (:func:`report_timing`); the figures are counters, the sim's from ``/diagnostics``.
 """
 
 import json
 from pathlib import Path
-import re
 import sys
 
 from nfmr_dlsmc.analysis.evaluation import plant_run
@@ -18,6 +17,7 @@ from nfmr_dlsmc.analysis.run_metrics import (
     last_segment,
     loop_figures,
     metrics_table,
+    run_timing,
     state_metrics,
     STEER_FIELDS,
     with_ground_truth,
@@ -35,6 +35,7 @@ from nfmr_dlsmc.ros.run_series import (
     JOINT_TOPIC,
     loop_windows,
     run_notes,
+    sim_stepping,
     state_series,
     STATE_TOPIC,
     steer_joint_rates,
@@ -100,35 +101,19 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
           f'{sum(counts.values())} messages recorded; plots in {run_dir}')
     report_timing(run_timing(real_time_factor, loop_figures(loop_windows(contents)),
-                             run_dir / 'sim.log'),
+                             sim_stepping(contents)),
                   run_dir)
     if options.animate:
         _animate(bag_dir, run_dir / 'run.gif')
 
 
-def run_timing(real_time_factor: float, loop: dict | None, sim_log: Path) -> dict:
-    """
-    Return how a run kept its timing.
-
-    ``sim_real_time_factor`` [-], ``sim_behind_s`` (the wall time the realtime sim gave up,
-    from its log; 0 if none), ``controller_loop`` (``rate_hz``, ``period_p99_ms``,
-    ``overruns``, ``windows`` from the recorded ``/diagnostics``; None without a bag) and
-    ``sim_braked`` (how often the sim braked for want of a valid command).
-    """
-    log = sim_log.read_text() if sim_log.is_file() else ''
-    braking = sum(1 for line in log.splitlines()
-                  if 'braking' in line and 'no command received yet' not in line)
-    behind = re.findall(r'slower than real time: ([0-9.]+) s behind', log)
-    return {'sim_real_time_factor': real_time_factor,
-            'sim_behind_s': float(behind[-1]) if behind else 0.0,
-            'controller_loop': loop, 'sim_braked': braking}
-
-
 def report_timing(timing: dict, run_dir: Path) -> None:
     """Print the timing line and write it to ``timing.json`` in the run folder."""
+    waits = (f"; {timing['sim_waits']} waits for the controller, {timing['sim_waited_s']:.3f} s"
+             if timing['sim_waits'] else '')
     parts = [f"timing: sim {timing['sim_real_time_factor']:.2f}x real time"
-             + (f" ({timing['sim_behind_s']:.3f} s behind the wall clock)"
-                if timing['sim_behind_s'] else '')]
+             + (f" ({timing['sim_behind_s']:.3f} s behind the wall clock{waits})"
+                if timing['sim_behind_s'] or waits else '')]
     loop = timing['controller_loop']
     if loop:
         parts.append(f"controller loop {loop['rate_hz']:.1f} Hz, period p99 "

@@ -22,6 +22,8 @@ JOINT_TOPIC = '/joint_states'
 GROUND_TRUTH_TOPIC = '/ground_truth'
 DIAGNOSTICS_TOPIC = '/diagnostics'
 REFERENCE_PATH_TOPIC = '/reference_path'
+#: The name of the sim's status on ``/diagnostics``: its stepping counters.
+SIM_STATUS_NAME = 'nfmr sim: stepping'
 #: The state fields the metrics need.
 NEEDED_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_d', 'theta_r', 'theta_e', 'v',
                  'omega', 'stopped')
@@ -137,6 +139,28 @@ def follows_a_path(contents: BagContents) -> bool:
     return any(kv.key == 'arrival' for _, message in decoded(
         contents.of(DIAGNOSTICS_TOPIC), DiagnosticArray) for status in message.status
         for kv in status.values)
+
+
+def status_figures(message: DiagnosticArray, name: str) -> dict | None:
+    """Return the numbers of the status ``name`` in ``message`` by key, or None."""
+    for status in message.status:
+        if status.name == name:
+            figures = {}
+            for kv in status.values:
+                try:
+                    figures[kv.key] = float(kv.value)
+                except ValueError:
+                    continue
+            return figures
+    return None
+
+
+def sim_stepping(contents: BagContents) -> dict | None:
+    """Return the sim's last stepping counters recorded on ``/diagnostics``, or None."""
+    last = None
+    for _, message in decoded(contents.of(DIAGNOSTICS_TOPIC), DiagnosticArray):
+        last = status_figures(message, SIM_STATUS_NAME) or last
+    return last
 
 
 def ground_truth_track(contents: BagContents) -> tuple[np.ndarray, np.ndarray] | None:

@@ -44,12 +44,14 @@ import sys
 import threading
 import time
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
+from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME
 from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
 from nfmr_sim.realtime_pacer import RealtimePacer
@@ -57,6 +59,7 @@ from nfmr_sim.ros.messages import odometry_covariance, odometry_message, time_me
 from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock as NodeClock, ClockType
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -71,6 +74,8 @@ GATE_POLL = 0.01
 PAUSE_POLL = 0.05
 #: Least wall time [s] between two log lines saying the realtime sim fell behind.
 SLIP_LOG_PERIOD = 10.0
+#: Wall time [s] between two reports of the stepping on ``/diagnostics``.
+STATUS_PERIOD = 1.0
 #: Longest wall time [s] a realtime step waits for a fresh command
 #: (``realtime_max_command_age``); a controller silent for longer is not waited for again
 #: until it commands (its commands time out as ``command_timeout`` says).
@@ -128,6 +133,11 @@ class SimNode(SchemaNode):
         self.steps = 0
         self.behind_s, self.slips = 0.0, 0  # realtime: wall time given up, slips (pacer)
         self.waits, self.waited_s = 0, 0.0  # realtime: waits for the controller, their time
+        self.brakes = 0  # times the wheels braked for a missing or invalid command
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        # On the wall clock: the report must come while simulated time stands still too.
+        self.create_timer(STATUS_PERIOD, self._publish_status,
+                          clock=NodeClock(clock_type=ClockType.STEADY_TIME))
         self._controller_silent = False  # realtime: no command within REALTIME_COMMAND_WAIT
         self._slips_logged, self._slip_logged_at = 0, -SLIP_LOG_PERIOD
         self.failure = None  # what ended stepping, set by the step thread (LoopThread)
@@ -261,6 +271,7 @@ class SimNode(SchemaNode):
                     self.get_logger().info(f'reached max_time {s.max_time:g} s: stepping '
                                            'stopped until max_time is raised')
                     held = self.at_max_time = True
+                    self._publish_status()  # the figures of the whole run, at once
                 with self._control:
                     self._control.wait(PAUSE_POLL)
                 continue
@@ -342,6 +353,8 @@ class SimNode(SchemaNode):
         """Step thread, holding ``_control``: one physics step; False when shutting down."""
         command, report = self.gate.take(self.world.time)
         if report and command is None:
+            if self.gate.has_commanded:
+                self.brakes += 1
             self.get_logger().warning(report)
         elif report:
             self.get_logger().info(report)
@@ -383,10 +396,36 @@ class SimNode(SchemaNode):
         self._joint_pub.publish(joints)
         self._dist_pub.publish(Bool(data=bool(out.active_disturbances)))
 
+    def _publish_status(self) -> None:
+        """Report the stepping on ``/diagnostics``: counters, not log text, for the report."""
+        msg = DiagnosticArray(status=[stepping_status(
+            steps=self.steps, sim_time_s=self.world.time, behind_s=self.behind_s,
+            slips=self.slips, waits=self.waits, waited_s=self.waited_s, brakes=self.brakes)])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        try:
+            self._diag_pub.publish(msg)
+        except Exception:
+            if self.context.ok():
+                raise  # else shutting down: the context went first
+
     def destroy_node(self):
         self.stop()
         self.world.close()
         return super().destroy_node()
+
+
+def stepping_status(**figures) -> DiagnosticStatus:
+    """
+    Return the sim's status on ``/diagnostics`` of its counters ``figures``.
+
+    They are ``steps``, ``sim_time_s``, ``behind_s`` (wall time the realtime sim gave up),
+    ``slips``, ``waits`` and ``waited_s`` (for a fresh command, D28) and ``brakes`` (for a
+    missing or invalid command, after the first command).
+    """
+    status = DiagnosticStatus(name=SIM_STATUS_NAME, hardware_id='pybullet',
+                              level=DiagnosticStatus.OK, message='stepping')
+    status.values = [KeyValue(key=k, value=f'{v:.9g}') for k, v in figures.items()]
+    return status
 
 
 def main(args=None) -> int:
