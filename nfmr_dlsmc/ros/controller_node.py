@@ -188,6 +188,9 @@ class ControllerNode(SchemaLifecycleNode):
     def __init__(self, **kwargs):
         super().__init__('controller', controller_parameters(), **kwargs)
         self._values = self.parameter_values
+        if self._values['autostart']:
+            # A bad parameter ends the node here, a user error, before any thread is started.
+            _new_session(self._values)
         self.session = None  # while configured
         self._lock = threading.Lock()
         self._active = False  # whether odometry is taken and commands are published
@@ -224,7 +227,6 @@ class ControllerNode(SchemaLifecycleNode):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.ticks = 0
         if self._values['autostart']:
-            _new_session(self._values)  # a bad parameter ends the node here: a user error
             self.trigger_configure()
 
     @property
