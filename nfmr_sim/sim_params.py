@@ -30,6 +30,7 @@ from nfmr_dlsmc.core.schema import (
 )
 from nfmr_dlsmc.core.sensing import SENSING_KEYS, SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import SteerMode
+from nfmr_dlsmc.core.steering_presets import STEERING_KEYS, STEERING_PRESETS, with_steering
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_sim.urdf import ChassisConfig
 from nfmr_sim.world_config import (
@@ -56,6 +57,11 @@ class SimSettings:
                          "odometry's rate, latency, noise and bias walk "
                          "(disturbance.odom_*: set one or the other); '': those "
                          'parameters as given', one_of('', *SENSING_PRESETS), read_only=True)
+    steer_motors: str = param('', '', 'a steering preset (ideal, servo, slow) that sets the '
+                              "steer motors' lag and rate limit (motors.steer_lag, "
+                              'motors.steer_rate_limit: set one or the other; '
+                              "doc/steering.md); '': those parameters as given",
+                              one_of('', *STEERING_PRESETS), read_only=True)
     realtime_max_lag: float = param(0.003, 's', 'realtime: the sim catches up a delay up to '
                                     'this long by stepping without sleeping; beyond it the '
                                     'run continues slower than real time (counted and '
@@ -106,20 +112,25 @@ class SimSettings:
         return max(1, round(steps)) if math.isfinite(steps) else 0
 
 
-def _expand_sensing(flat: dict) -> dict:
-    """Return ``flat`` with a ``sensing`` preset's odometry values in place."""
-    preset = flat.get('sensing') or ''
+def _expand_preset(flat: dict, name: str, presets, keys, apply, what: str) -> dict:
+    """
+    Return ``flat`` with the values of its preset ``name`` (a SimSettings field) in place.
+
+    ``presets`` maps a preset to its values of ``keys`` (parameter -> unit); ``apply(flat,
+    preset)`` puts them in. A parameter of ``keys`` given apart from its default beside the
+    preset is refused, naming ``what`` the preset sets: one or the other.
+    """
+    preset = flat.get(name) or ''
     if not preset:
         return flat
-    if preset not in SENSING_PRESETS:
-        from_flat(SimSettings, {'sensing': preset})  # the schema's error, naming the rule
+    if preset not in presets:
+        from_flat(SimSettings, {name: preset})  # the schema's error, naming the rule
     default = sim_parameter_defaults()
-    for key in SENSING_KEYS:
+    for key in keys:
         if key in flat and flat[key] != default[key]:
-            raise ParameterError(key, flat[key], f'conflicts with sensing = {preset!r}: set '
-                                 'the preset or the odometry parameters, not both',
-                                 SENSING_KEYS[key])
-    return {**with_sensing(flat, preset), 'sensing': preset}
+            raise ParameterError(key, flat[key], f'conflicts with {name} = {preset!r}: set '
+                                 f'the preset or {what}, not both', keys[key])
+    return {**apply(flat, preset), name: preset}
 
 
 def sim_parameters() -> list[Param]:
@@ -145,7 +156,10 @@ def sim_settings(flat: dict) -> SimSettings:
 
     """
     check_known(flat, sim_parameters())
-    flat = _expand_sensing(flat)
+    flat = _expand_preset(flat, 'sensing', SENSING_PRESETS, SENSING_KEYS, with_sensing,
+                          'the odometry parameters')
+    flat = _expand_preset(flat, 'steer_motors', STEERING_PRESETS, STEERING_KEYS,
+                          with_steering, 'the steer motor parameters')
     world = from_flat(WorldConfig, flat, chassis=from_flat(ChassisConfig, flat),
                       motors=from_flat(MotorConfig, flat),
                       friction=from_flat(FrictionConfig, flat),

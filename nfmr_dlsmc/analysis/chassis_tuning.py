@@ -227,6 +227,8 @@ class TuningSetup:
         Start of the hold window [s], < ``duration``.
     prune_distance : float
         The pruning bound of :class:`DivergenceWatch` in the hold window [m].
+    steering : str or None
+        A steering preset instead of the file's steer motors.
 
     """
 
@@ -237,6 +239,7 @@ class TuningSetup:
     duration: float = 30.0
     hold_from: float = 15.0
     prune_distance: float = 0.05
+    steering: str | None = None
 
     def __post_init__(self):
         for name, value in (('--duration', self.duration), ('--hold-from', self.hold_from),
@@ -324,7 +327,8 @@ def load_tuning(setup: TuningSetup) -> Tuning:
     params = controller_params(flat)
     evaluations = tuple(
         load_evaluation('pybullet', 'dlsmc', s.x0, setup.duration, 'none',
-                        setup.params_file, sensing=setup.sensing, trajectory_name=s.trajectory)
+                        setup.params_file, sensing=setup.sensing, trajectory_name=s.trajectory,
+                        steering=setup.steering)
         for s in setup.scenarios)
     untuned = {d.name: _value_of(params.dlsmc, d.name) for d in setup.space}
     return Tuning(setup, flat, untuned, evaluations)
@@ -463,6 +467,8 @@ def open_study(url: str, name: str, tuning: Tuning, force: bool):
                          f'{key} = {was} there, {now} with {tuning.setup.params_file}'
                          + (f' and --sensing {tuning.setup.sensing}'
                             if tuning.setup.sensing else '')
+                         + (f' and --steering {tuning.setup.steering}'
+                            if tuning.setup.steering else '')
                          + '; name another --study or add --force to continue it')
     return study
 

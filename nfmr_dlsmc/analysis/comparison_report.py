@@ -22,6 +22,7 @@ from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES
 from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, format_metric
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.core.steering_presets import with_steering
 from nfmr_dlsmc.plants.registry import robot_plant
 
 #: Column order of Table 2 (the paper's) and the controllers it does not have.
@@ -182,7 +183,7 @@ def _hold_section(document: dict) -> list[str]:
            '') + ') and ' + ('the measured steer joint rates (— : no joints in this model).'
                              if kinematic else
                              'of the measured steer joints, whose motors are capped at '
-                             f'{_steer_rate_limit():g} rad/s.'),
+                             f'{_steer_rate_limit(document):g} rad/s.'),
         '',
     ]
     for title, case in runs:
@@ -399,7 +400,7 @@ def _robot_section(document: dict) -> list[str]:
     Every controller of a pybullet run in its :data:`ROBOT_GROUPS` group, with the figures
     that put it there.
     """
-    steer_cap = _steer_rate_limit()
+    steer_cap = _steer_rate_limit(document)
     runs = _scenario_runs(document)
     figures = {n: [r[n] for r in runs] for n in CONTROLLER_NAMES if all(n in r for r in runs)}
     groups = {n: _robot_group(f, steer_cap) for n, f in figures.items()}
@@ -424,14 +425,14 @@ def _robot_section(document: dict) -> list[str]:
 
 
 def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, where: str,
-                  duration: float) -> str:
+                  duration: float, steer_cap: float) -> str:
     setting = (
         'reproduced with the kinematic model (3): paper sine x_d = 0.5 t, y_d = sin(0.5 x_d), '
         f'{duration:g} s at dt = 1 ms, forward Euler' if plant == 'kinematic' else
         "run on the simulated 4WIS chassis instead of the paper's kinematic model: pybullet, "
         'in-process (`nfmr_sim.plant`), the Table 1 chassis (1000 kg, 20 Nm '
         'motors, steer joints capped at '
-        f'{_steer_rate_limit():g} rad/s), double Ackermann wheel mapping, '
+        f'{steer_cap:g} rad/s), double Ackermann wheel mapping, '
         'controller and physics in lockstep at 1 ms; the controller sees the odometry of P, '
         "the numbers and figures use its ground truth; Case 2's yaw-rate pulses are added to "
         'the commanded omega before the wheel mapping. Paper sine x_d = 0.5 t, y_d = '
@@ -477,10 +478,10 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         'for reference without a percentage, since the plants differ.', ''])
     lines = [
         '# nfmr comparison report' + ('' if plant == 'kinematic' else f' — {plant} chassis')
-        + ('' if document.get('sensing', 'ideal') == 'ideal' else
-           f", {document['sensing']} odometry"),
+        + _conditions(document),
         '',
-        _introduction(plant, gains_path, seconds, runs, where, duration),
+        _introduction(plant, gains_path, seconds, runs, where, duration,
+                      _steer_rate_limit(document)),
         '',
         *_sensing_note(document.get('sensing', 'ideal')),
         '## Table 2 — Case 1, x0 = (1, 4, 0): distance error',
@@ -575,8 +576,7 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
     lines = [
         f'# nfmr comparison along a path — {path_file.name}'
         + ('' if plant == 'kinematic' else f', {plant} chassis')
-        + ('' if document.get('sensing', 'ideal') == 'ideal' else
-           f", {document['sensing']} odometry"),
+        + _conditions(document),
         '',
         f'Every controller follows `{path_file}` from its start at rest, x0 = ({start}), '
         f'timed by the speed profile of the parameter file ({reference_duration:.1f} s), '
@@ -603,6 +603,14 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
     path.write_text('\n'.join(lines))
 
 
-def _steer_rate_limit() -> float:
-    """Return the steer joints' rate limit [rad/s] of the default pybullet chassis."""
-    return robot_plant('pybullet').settings({}).world.motors.steer_rate_limit
+def _conditions(document: dict) -> str:
+    """Return the title's note of the odometry and steering presets other than ``ideal``."""
+    return ''.join(f', {document[key]} {what}'
+                   for key, what in (('sensing', 'odometry'), ('steering', 'steering'))
+                   if document.get(key, 'ideal') != 'ideal')
+
+
+def _steer_rate_limit(document: dict) -> float:
+    """Return the steer joints' rate limit [rad/s]: the default chassis's, or its preset's."""
+    flat = with_steering({}, document.get('steering', 'ideal'))
+    return robot_plant('pybullet').settings(flat).world.motors.steer_rate_limit

@@ -46,18 +46,18 @@ def checked_gain_blocks(path, names) -> dict:
 
 def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
                      duration: float = CASE1_LONGITUDINAL.duration,
-                     sensing: str | None = None) -> list[tuple]:
+                     sensing: str | None = None, steering: str | None = None) -> list[tuple]:
     """
     Return every (scenario, controller) run of ``duration`` [s] on ``plant``.
 
     On the kinematic plant the DLSMC C1:C2 runs of Fig. 13 follow (the paper's kinematic
-    figure; left out on pybullet). A task is (key, name, block, scenario, plant, sensing),
-    its key (case, start, controller or "C1:C2"); ``sensing`` as for
-    :func:`~nfmr_dlsmc.analysis.comparison_scenarios.run_scenario`.
+    figure; left out on pybullet). A task is (key, name, block, scenario, plant, sensing,
+    steering), its key (case, start, controller or "C1:C2"); ``sensing`` and ``steering``
+    as for :func:`~nfmr_dlsmc.analysis.comparison_scenarios.run_scenario`.
     """
     scenarios = [replace(s, duration=duration) for s in SCENARIOS]
-    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant, sensing)
-             for s in scenarios for name in names]
+    tasks = [((s.case, s.start_key, name), name, blocks.get(name), s, plant, sensing,
+              steering) for s in scenarios for name in names]
     if plant != 'kinematic':
         return tasks
     base = blocks.get('dlsmc') or {}
@@ -65,12 +65,13 @@ def comparison_tasks(names, blocks: dict, plant: str = 'kinematic',
     for c1, c2 in C_RATIOS:
         outer = {**(base.get('outer') or {}), 'C1': c1, 'C2': c2}
         tasks.append((('c_ratio', longitudinal.start_key, f'{c1:g}:{c2:g}'), 'dlsmc',
-                      {**base, 'outer': outer}, longitudinal, plant, sensing))
+                      {**base, 'outer': outer}, longitudinal, plant, sensing, steering))
     return tasks
 
 
 def path_tasks(names, blocks: dict, trajectory, arrival, duration: float,
-               plant: str = 'kinematic', sensing: str | None = None) -> list[tuple]:
+               plant: str = 'kinematic', sensing: str | None = None,
+               steering: str | None = None) -> list[tuple]:
     """
     Return a run of every controller of ``names`` along a path, as :func:`comparison_tasks`.
 
@@ -81,7 +82,7 @@ def path_tasks(names, blocks: dict, trajectory, arrival, duration: float,
     scenario = Scenario('path', tuple(round(float(v), 9) + 0.0 for v in trajectory.start_pose),
                         YawRateDisturbance(), duration, trajectory=trajectory, arrival=arrival)
     return [(('path', scenario.start_key, name), name, blocks.get(name), scenario, plant,
-             sensing) for name in names]
+             sensing, steering) for name in names]
 
 
 def run_all(tasks, jobs, progress=None) -> tuple[dict, dict]:
@@ -110,8 +111,8 @@ def run_all(tasks, jobs, progress=None) -> tuple[dict, dict]:
 
 def _run_task(task: tuple) -> tuple:
     """Run one task in a worker (:func:`comparison_tasks`) -> (key, metrics, series)."""
-    key, name, block, scenario, plant, sensing = task
-    result = run_scenario(name, block, scenario, plant, sensing)
+    key, name, block, scenario, plant, sensing, steering = task
+    result = run_scenario(name, block, scenario, plant, sensing, steering)
     pulses = [p.start for p in scenario.disturbance.pulses]
     goal = getattr(scenario.trajectory, 'end_pose', None)  # a path's last pose
     metrics = run_metrics(result, InputLimits().omega_max, pulses,
@@ -144,17 +145,21 @@ def _envelope(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return blocks.min(axis=1), blocks.max(axis=1), blocks.mean(axis=1)
 
 
-def results_document(metrics: dict, plant: str, sensing: str | None = None) -> dict:
+def results_document(metrics: dict, plant: str, sensing: str | None = None,
+                     steering: str | None = None) -> dict:
     """
     Return ``results.json``'s document.
 
     ``"plant"`` -> the plant's name, ``"sensing"`` -> the odometry preset on pybullet
-    (``ideal`` unless given), and case -> start -> controller -> metrics (the C1:C2 runs
-    under ``c_ratio`` -> start -> "C1:C2").
+    (``ideal`` unless given), ``"steering"`` -> the steering preset when one was given (the
+    default chassis's motors without), and case -> start -> controller -> metrics (the
+    C1:C2 runs under ``c_ratio`` -> start -> "C1:C2").
     """
     document = {'plant': plant}
     if plant == 'pybullet':
         document['sensing'] = sensing or 'ideal'
+        if steering is not None:
+            document['steering'] = steering
     for (case, start, name), values in metrics.items():
         document.setdefault(case, {}).setdefault(start, {})[name] = values
     return document

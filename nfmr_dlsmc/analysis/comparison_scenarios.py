@@ -15,6 +15,7 @@ from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.sensing import with_sensing
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
+from nfmr_dlsmc.core.steering_presets import with_steering
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import SimResult, simulate, with_steer_angles
@@ -79,7 +80,8 @@ def robot_estimator() -> EstimatorConfig:
 
 
 def run_scenario(name: str, block: dict | None, scenario: Scenario,
-                 plant: str = 'kinematic', sensing: str | None = None) -> SimResult:
+                 plant: str = 'kinematic', sensing: str | None = None,
+                 steering: str | None = None) -> SimResult:
     """
     Run controller ``name`` with gain block ``block`` on ``scenario`` and ``plant``.
 
@@ -91,19 +93,25 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     before the wheel mapping and the chassis is that of the default world of the registered
     ``pybullet`` plant (Table 1, physics at 1 ms). With a ``sensing`` preset (pybullet
     only) the world's odometry is the preset's and every law sees the pose through the
-    robot profile's estimator (``config/robot_case1.yaml``), so that all compare alike.
+    robot profile's estimator (``config/robot_case1.yaml``), so that all compare alike;
+    with a ``steering`` preset (pybullet only) the steer motors are the preset's.
     """
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     if sensing is not None and plant != 'pybullet':
         raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
                              'kinematic model has no odometry')
+    if steering is not None and plant != 'pybullet':
+        raise ParameterError('steering', steering, 'applies to the pybullet plant: the '
+                             'kinematic model has no steer motors')
     trajectory = scenario.trajectory or make_trajectory('sine')
     controller = with_arrival(build_controller(name, block, dt=scenario.dt), trajectory,
                               scenario.arrival)
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
-        world = plant_.settings({} if sensing is None else with_sensing({}, sensing)).world
+        flat = {} if sensing is None else with_sensing({}, sensing)
+        world = plant_.settings(flat if steering is None
+                                else with_steering(flat, steering)).world
         estimator = None if sensing is None else robot_estimator()
         return plant_.simulate(controller, trajectory, scenario.x0, scenario.duration,
                                world, RobotGeometry(), SteerMode(), scenario.disturbance,

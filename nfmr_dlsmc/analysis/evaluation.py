@@ -96,7 +96,8 @@ class Evaluation:
 def load_evaluation(plant: str, controller_name: str, x0, duration: float | None,
                     disturbance: str, params_file=None, gains_file=None,
                     dt: float | None = None, trajectory_name: str | None = None,
-                    sensing: str | None = None, path=None) -> Evaluation:
+                    sensing: str | None = None, path=None,
+                    steering: str | None = None) -> Evaluation:
     """
     Load and check one scenario; nothing is simulated yet.
 
@@ -124,6 +125,8 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     path : str or Path, optional
         A path file to follow instead of the file's trajectory (``trajectory.name: path``);
         the controller stops at its end.
+    steering : str, optional
+        A steering preset instead of the file's steer motors (pybullet only).
 
     Raises
     ------
@@ -155,8 +158,11 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     if sensing is not None and plant != 'pybullet':
         raise ParameterError('sensing', sensing, 'applies to the pybullet plant: the '
                              'kinematic model has no odometry')
-    world = (pybullet_world(params_file, params.dlsmc.dt, sensing) if plant == 'pybullet'
-             else None)
+    if steering is not None and plant != 'pybullet':
+        raise ParameterError('steering', steering, 'applies to the pybullet plant: the '
+                             'kinematic model has no steer motors')
+    world = (pybullet_world(params_file, params.dlsmc.dt, sensing, steering)
+             if plant == 'pybullet' else None)
     if world is not None:  # the rule nfmr-run applies
         check_odometry_timing(world.disturbance.odom_rate, world.disturbance.odom_latency,
                               flat)

@@ -8,13 +8,15 @@ start.
 import math
 
 from nfmr_dlsmc.core.sensing import with_sensing
+from nfmr_dlsmc.core.steering_presets import with_steering
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import load_params_file
 import numpy as np
 
 
-def pybullet_world(params_file, dt: float, sensing: str | None = None):
+def pybullet_world(params_file, dt: float, sensing: str | None = None,
+                   steering: str | None = None):
     """
     Return the pybullet chassis's world configuration for a controller of period ``dt``.
 
@@ -28,6 +30,9 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None):
     sensing : str, optional
         A sensing preset (:data:`~nfmr_dlsmc.core.sensing.SENSING_PRESETS`) replacing the
         file's odometry (``--sensing``).
+    steering : str, optional
+        A steering preset (:data:`~nfmr_dlsmc.core.steering_presets.STEERING_PRESETS`)
+        replacing the file's steer motor lag and rate limit (``--steering``).
 
     Returns
     -------
@@ -45,6 +50,8 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None):
     flat = load_params_file(params_file, 'sim') if params_file else {}
     if sensing is not None:
         flat = with_sensing(flat, sensing)
+    if steering is not None:
+        flat = with_steering(flat, steering)
     world = robot_plant('pybullet').settings(flat).world
     if world.physics_dt != dt:
         raise ParameterError('physics_dt', world.physics_dt,

@@ -19,6 +19,7 @@ import tempfile
 
 from nfmr_dlsmc.cli.entry import INTERRUPTED_STATUS, take_signals
 from nfmr_dlsmc.core.errors import NfmrError
+from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
 from nfmr_dlsmc.runtime.worker_pool import Cluster, SchedulerLost
@@ -360,6 +361,22 @@ def add_workers(parser: argparse.ArgumentParser, what: str) -> None:
                         help=f'run the {what} on the Dask cluster of this scheduler (e.g. '
                              'tcp://10.0.0.5:8786; every worker with nfmr installed) instead '
                              'of --jobs processes here')
+
+
+def add_steering(parser, pybullet_only: bool = True) -> None:
+    """
+    Add ``--steering``: the steer motors of a preset instead of the parameter file's.
+
+    ``parser`` is an argument parser or group; ``pybullet_only`` says so in the help, for
+    a command that also runs the kinematic model.
+    """
+    presets = ', '.join(f"{name} ({values['motors.steer_lag'] * 1000.0:g} ms lag, "
+                        f"{values['motors.steer_rate_limit']:g} rad/s)"
+                        for name, values in STEERING_PRESETS.items())
+    parser.add_argument('--steering', choices=list(STEERING_PRESETS), default=None,
+                        help=('pybullet: ' if pybullet_only else '')
+                        + "the steer motors' lag and rate limit from a preset instead of "
+                        f"the file's sim section (doc/steering.md): {presets}")
 
 
 @contextmanager

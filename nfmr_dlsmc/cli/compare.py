@@ -29,6 +29,7 @@ from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS
 from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
+    add_steering,
     add_workers,
     check_run_length,
     check_writable,
@@ -64,6 +65,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="pybullet: the robot's odometry (rate, latency, noise, bias) "
                              'from a preset, every law seeing the pose through the robot '
                              "profile's estimator (default: ideal, the ground truth)")
+    add_steering(parser)
     parser.add_argument('--duration', type=positive_number, default=None,
                         help="length of every run [s] (default 100, the paper's; with "
                              "--path the path's duration and 5 s; shorter for a quick look: "
@@ -100,6 +102,9 @@ def _run(args) -> int:
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')
+    if args.steering is not None and args.plant != 'pybullet':
+        raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
+                         'steer motors')
     if args.params is not None and args.path is None:
         raise UsageError('--params times a path: give --path too')
     reference = None
@@ -111,11 +116,12 @@ def _run(args) -> int:
         if args.duration is None:
             args.duration = round(reference.duration + PATH_MARGIN, 1)
         tasks = path_tasks(names, blocks, reference, params.arrival, args.duration,
-                           args.plant, args.sensing)
+                           args.plant, args.sensing, args.steering)
     else:
         if args.duration is None:
             args.duration = CASE1_LONGITUDINAL.duration
-        tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing)
+        tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing,
+                                 args.steering)
     with workers(args) as where:
         # Its figures show a point every DECIMATION steps: at least one.
         check_run_length(args.duration, tasks[0][3].dt,
@@ -127,7 +133,9 @@ def _run(args) -> int:
             print(f'\r[{done:>3}/{total}] {time.perf_counter() - begin:5.1f} s  '
                   f'{key[0]} {key[1]} {key[2]:<16}', end='', file=sys.stderr, flush=True)
 
-        odometry = '' if args.sensing is None else f' with {args.sensing} odometry'
+        presets = [f'{preset} {what}' for preset, what in (
+            (args.sensing, 'odometry'), (args.steering, 'steering')) if preset is not None]
+        odometry = f" with {' and '.join(presets)}" if presets else ''
         print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
               f'plant{odometry}, {describe_workers(where)}, gains from {gains_path}',
               file=sys.stderr)
@@ -144,7 +152,7 @@ def _run(args) -> int:
     if cluster is not None:
         print(format_cluster_report(cluster), file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
-    document = results_document(metrics, args.plant, args.sensing)
+    document = results_document(metrics, args.plant, args.sensing, args.steering)
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
     if reference is None:
         figures = write_figures(args.out, series, names, args.plant)
@@ -167,7 +175,7 @@ def _write_partial(args, lost: SchedulerLost, asked: int) -> None:
     metrics = lost.partial[0]
     args.out.mkdir(parents=True, exist_ok=True)
     document = {'complete': False, 'runs_finished': len(metrics), 'runs_asked': asked,
-                **results_document(metrics, args.plant, args.sensing)}
+                **results_document(metrics, args.plant, args.sensing, args.steering)}
     path = args.out / 'results.json'
     path.write_text(json.dumps(json_ready(document), indent=1))
     lost.kept = f'{path} holds those {len(metrics)} (partial, "complete": false; no report)'

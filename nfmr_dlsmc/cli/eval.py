@@ -12,6 +12,7 @@ from nfmr_dlsmc.analysis.comparison_scenarios import PLANTS
 from nfmr_dlsmc.analysis.evaluation import evaluate, format_table, load_evaluation, paper_values
 from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
 from nfmr_dlsmc.cli.common import (
+    add_steering,
     check_run_length,
     json_ready,
     non_negative_number,
@@ -74,6 +75,7 @@ def _parser() -> argparse.ArgumentParser:
                              "file's sim section: ideal (every 1 ms, exact), good (100 Hz, "
                              '10 ms late, 1 mm / 1 mrad noise), harsh (50 Hz, 40 ms, 3 mm / '
                              '3 mrad, drifting bias); metrics are of the ground truth')
+    add_steering(parser)
     parser.add_argument('--json', action='store_true',
                         help='print the metrics as one JSON object on the last line')
     return parser
@@ -90,7 +92,7 @@ def _run(args) -> int:
                          'gains come from --params')
     evaluation = load_evaluation(args.plant, args.controller, args.x0, args.duration,
                                  args.disturbance, args.params, args.gains, args.dt,
-                                 args.trajectory, args.sensing, args.path)
+                                 args.trajectory, args.sensing, args.path, args.steering)
     duration = evaluation.duration
     check_run_length(duration, evaluation.params.dlsmc.dt)
     show = args.plant == 'pybullet' and sys.stderr.isatty()

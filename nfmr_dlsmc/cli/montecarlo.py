@@ -24,6 +24,7 @@ from nfmr_dlsmc.analysis.montecarlo import (
 )
 from nfmr_dlsmc.analysis.run_setup import pybullet_world, random_starts, start_pose
 from nfmr_dlsmc.cli.common import (
+    add_steering,
     add_workers,
     BATCH_ROBOT_BYTES,
     check_memory,
@@ -83,6 +84,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="pybullet: the robot's odometry from a preset (ideal, good, "
                              "harsh) instead of the file's sim section")
+    add_steering(parser)
     parser.add_argument('--params', metavar='FILE.yaml',
                         help="controller parameter file (the paper's law: batch simulator; "
                              'with a robot-profile option on, e.g. config/robot_case1.yaml, '
@@ -114,7 +116,10 @@ def _run(args) -> int:
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')
-    world = (pybullet_world(args.params, params.dlsmc.dt, args.sensing)
+    if args.steering is not None and args.plant != 'pybullet':
+        raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
+                         'steer motors')
+    world = (pybullet_world(args.params, params.dlsmc.dt, args.sensing, args.steering)
              if args.plant == 'pybullet' else None)
     origin = start_pose(params.trajectory)
     starts = random_starts(np.random.default_rng(args.seed), origin, args.x0_range, args.n)

@@ -10,6 +10,7 @@ from pathlib import Path
 import sys
 
 from nfmr_dlsmc.cli.common import (
+    add_steering,
     check_ros_log_folder,
     check_writable,
     OneLineParser,
@@ -37,6 +38,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="the robot's odometry from a preset instead of the file's sim "
                              'section (ideal, good, harsh); metrics are of the ground truth')
+    add_steering(parser, pybullet_only=False)
     parser.add_argument('--duration', type=float, default=None,
                         help='simulated time [s] (default: 100, or with a path its own '
                              'duration and 5 s to arrive)')

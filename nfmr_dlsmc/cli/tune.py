@@ -36,6 +36,7 @@ from nfmr_dlsmc.analysis.outer_tuning import (
 )
 from nfmr_dlsmc.cli.common import (
     add_output_file,
+    add_steering,
     add_workers,
     check_output_file,
     check_run_length,
@@ -61,8 +62,8 @@ KINEMATIC_DEFAULTS = {'candidates': 300, 'finalists': 8, 'screen_starts': 60, 'n
                       'ratio': 'fixed'}
 #: The chassis study's own options and their defaults (None on the command line: not given,
 #: which the kinematic search requires; None here: none, or decided from other options).
-PYBULLET_DEFAULTS = {'sensing': None, 'trials': 100, 'timeout': None, 'storage': None,
-                     'study': None, 'range': (), 'starts': 1, 'hold_from': 15.0,
+PYBULLET_DEFAULTS = {'sensing': None, 'steering': None, 'trials': 100, 'timeout': None,
+                     'storage': None, 'study': None, 'range': (), 'starts': 1, 'hold_from': 15.0,
                      'prune_distance': 0.05}
 #: Per plant: the default --out, --duration [s] and --x0-range (dx [m], dy [m], dth [rad]).
 PLANT_DEFAULTS = {
@@ -112,6 +113,7 @@ def _parser() -> argparse.ArgumentParser:
     study = parser.add_argument_group('the study on the chassis (--plant pybullet)')
     study.add_argument('--sensing', choices=tuple(SENSING_PRESETS),
                        help="odometry preset (default: the file's own)")
+    add_steering(study, pybullet_only=False)
     study.add_argument('--trials', type=positive_integer,
                        help='finished trials the study is to have; a resumed study runs the '
                             'rest (default 100)')
@@ -193,7 +195,7 @@ def _tune_on_chassis(args) -> int:
     setup = TuningSetup(
         Path(args.params) if args.params else shipped_config('robot_case1.yaml'),
         args.sensing, space, make_scenarios(args.starts, args.x0_range, args.seed),
-        args.duration, args.hold_from, args.prune_distance)
+        args.duration, args.hold_from, args.prune_distance, args.steering)
     tuning = load_tuning(setup)
     out = args.out
     history = out.with_name(f'{out.stem}_history.png')

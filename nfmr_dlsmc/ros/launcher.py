@@ -29,6 +29,7 @@ from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
+from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS, with_steering
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.clock_watch import ClockWatch
@@ -106,6 +107,8 @@ class RunOptions:
         Also write ``run.gif``, an animation of the robot from the bag, into the run folder.
     sensing : str or None
         A sensing preset replacing the file's odometry (``--sensing``).
+    steering : str or None
+        A steering preset replacing the file's steer motors (``--steering``).
     domain : int or None
         The ROS domain of the run; None: a free one of this host, discovery kept to this
         host (:mod:`nfmr_dlsmc.runtime.ros_domain`).
@@ -126,6 +129,7 @@ class RunOptions:
     no_compare: bool
     animate: bool = False
     sensing: str | None = None
+    steering: str | None = None
     domain: int | None = None
     path: Path | None = None
 
@@ -166,6 +170,8 @@ def run(options: RunOptions) -> int:
         sim_flat['initial_pose'] = list(params.trajectory.start_pose)
     if options.sensing is not None:
         sim_flat = with_sensing(sim_flat, options.sensing)
+    if options.steering is not None:
+        sim_flat = with_steering(sim_flat, options.steering)
     settings = robot_plant('pybullet').settings(sim_flat)
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
@@ -303,6 +309,7 @@ def _sim_args(config: Path, options: RunOptions, initial_pose) -> list[str]:
             '-p', f'start_after_subscribers:={1 if options.no_record else 2}',
             '-p', f'max_time:={float(options.duration)!r}',
             *_sensing_args(options.sensing),
+            *_steering_args(options.steering),
             *(('-p', f'initial_pose:={[float(v) for v in initial_pose]!r}')
               if options.path is not None else ())]
 
@@ -318,6 +325,20 @@ def _sensing_args(preset: str | None) -> list[str]:
         return []
     values = [f'{key}:={float(value)!r}' for key, value in SENSING_PRESETS[preset].items()]
     return [arg for value in ["sensing:=''", *values] for arg in ('-p', value)]
+
+
+def _steering_args(preset: str | None) -> list[str]:
+    """
+    Return the sim's ROS arguments of a steering preset ([] for None).
+
+    Its steer motor values, and no preset name: ``--steering`` replaces whatever the file
+    says of the steer motors, its own ``steer_motors:`` preset included (both would
+    conflict in the sim).
+    """
+    if preset is None:
+        return []
+    values = [f'{key}:={float(value)!r}' for key, value in STEERING_PRESETS[preset].items()]
+    return [arg for value in ["steer_motors:=''", *values] for arg in ('-p', value)]
 
 
 def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
