@@ -92,4 +92,10 @@ def release_participants():
     by a test then never discovers the test's nodes.
     """
     if _CONTEXTS:
+        # A controller's input thread ends as its context does; until it has, it holds the
+        # node, and so the context. (With a context still running, its threads run on.)
+        if not any(context.ok() for context in list(_CONTEXTS)):
+            for thread in threading.enumerate():
+                if thread.name == 'dlsmc-inputs':
+                    thread.join(timeout=1.0)
         gc.collect()

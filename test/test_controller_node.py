@@ -3,6 +3,7 @@
 import math
 import time
 
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path as PathMessage
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
@@ -433,6 +434,32 @@ def path_message(points, frame='odom', stamps=None):
         pose.pose.orientation.w = 1.0
         msg.poses.append(pose)
     return msg
+
+
+def test_each_path_is_answered_on_the_status_topic_and_a_repeat_is_not_taken_twice(setup, log):
+    node, peer = setup()
+    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
+    answers = []
+    status = peer.create_subscription(DiagnosticStatus, 'reference_path_status', answers.append,
+                                      QOS)
+    wait_matched(publisher, status)
+    drive(peer, 5)
+    refused = path_message([(6.0, 4.0), (8.0, 4.0)])
+    refused.header.stamp.sec = 7
+    publisher.publish(refused)
+    wait_for(lambda: len(answers) == 1, what='the answer to the refused path')
+    assert answers[0].level == DiagnosticStatus.ERROR
+    assert answers[0].message.startswith('refused: its first point')
+    assert {kv.key: kv.value for kv in answers[0].values} == {
+        'stamp': '7.000000000', 'frame': 'odom', 'poses': '2'}
+    taken = path_message([(1.0, 4.0), (3.0, 4.0), (3.0, 6.0)], stamps=[0.0] * 3)
+    taken.header.stamp.sec = 8
+    for k in (2, 3):  # sent twice, as a sender repeats it until answered
+        publisher.publish(taken)
+        wait_for(lambda: len(answers) == k, what=f'answer {k}')
+    assert answers[1] == answers[2] and answers[1].level == DiagnosticStatus.OK
+    assert answers[1].message.startswith('following a new path from the next tick: 3 points')
+    assert sum('following a new path' in m for m in log.read()) == 1  # taken once
 
 
 def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_published(

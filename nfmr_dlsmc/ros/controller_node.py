@@ -24,7 +24,9 @@ refused in one logged line, and the previous reference stays. Each path taken or
 is answered on ``reference_path_status`` (diagnostic_msgs/DiagnosticStatus, reliable,
 volatile): level OK when taken, ERROR when refused, the message saying what was taken or
 why not, and the values ``stamp`` (the path's header stamp, ``sec.nanosec``), ``frame`` and
-``poses``, by which a sender knows the answer is to its path (:func:`path_answer`).
+``poses``, by which a sender knows the answer is to its path (:func:`path_answer`). A path
+received again with the same stamp, frame and number of poses (a sender that repeats it
+until answered) is answered again, not taken again.
 
 Lifecycle (``rclpy.lifecycle``; ``ros2 lifecycle set /controller <transition>``):
 
@@ -204,6 +206,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._active_timers = []  # the watchdog and the markers, while active
         self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
         self._reference = None  # (x_d [m], y_d [m], theta_d [rad]) of the latest tick
+        self._last_path = None  # (stamp, frame, poses) of the last path answered, its answer
         self._stats = None
         self._clock_rate = ClockRateWatch()  # tick_source clock: odometry's pace against ours
         self._state_layout = [MultiArrayDimension(
@@ -219,6 +222,9 @@ class ControllerNode(SchemaLifecycleNode):
         self._input_executor.add_node(self._inputs)
         self._input_thread = LoopThread(self._spin_inputs, 'dlsmc-inputs', node=self)
         self._input_thread.start()
+        # The context's end ends the thread at once (the executor is woken then too), so
+        # that nothing keeps the node and its DDS participant past it.
+        self.context.on_shutdown(self._input_thread.running.clear)
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._path_status_pub = self.create_publisher(DiagnosticStatus, 'reference_path_status',
                                                       PATH_STATUS_QOS)
@@ -246,13 +252,20 @@ class ControllerNode(SchemaLifecycleNode):
 
     def _spin_inputs(self) -> None:
         """Spin the inputs' node until stopped or the context ends (the input thread)."""
-        while self._input_thread.running.is_set() and self.context.ok():
-            try:
-                self._input_executor.spin_once(timeout_sec=INPUT_SPIN_TIMEOUT)
-            except Exception:
-                if self.context.ok():
-                    raise
-                return  # shutting down: the context went first
+        try:
+            while self._input_thread.running.is_set() and self.context.ok():
+                try:
+                    self._input_executor.spin_once(timeout_sec=INPUT_SPIN_TIMEOUT)
+                except Exception:
+                    if self.context.ok():
+                        raise
+                    return  # shutting down: the context went first
+        finally:
+            # Let go of the executor here, in the one thread that spins it: a reference
+            # cycle through rclpy's C++ executor is never collected, and would keep the node
+            # and its DDS participant alive.
+            self._input_executor.remove_node(self._inputs)
+            self._input_executor = None
 
     # -- lifecycle --------------------------------------------------------------------------
 
@@ -452,6 +465,10 @@ class ControllerNode(SchemaLifecycleNode):
         frames = {msg.header.frame_id} | {p.header.frame_id for p in msg.poses} - {''}
         session = self.session
         topic = self._path_sub.topic_name if self._path_sub is not None else 'reference_path_in'
+        key = (path_stamp(msg.header.stamp), msg.header.frame_id, len(msg.poses))
+        if self._last_path is not None and self._last_path[0] == key:
+            self._path_status_pub.publish(self._last_path[1])  # a repeat: answered again
+            return
         try:
             if frames != {frame}:
                 raise PathError(f"it is in frame(s) {', '.join(map(repr, sorted(frames)))}, "
@@ -473,13 +490,19 @@ class ControllerNode(SchemaLifecycleNode):
         summary = (f'following a new path from the next tick: {len(reference.points)} points, '
                    f'{reference.length:.2f} m, {reference.duration:.1f} s')
         self.get_logger().info(f'{topic}: {summary}')
-        self._path_status_pub.publish(path_answer(msg, topic, None, summary))
+        self._answer_path(key, path_answer(msg, topic, None, summary))
 
     def _refuse_path(self, msg: Path, topic: str, problem: str) -> None:
         """Log and answer the refusal of the path ``msg``; the previous reference stays."""
         self.get_logger().error(f'{topic}: path of {len(msg.poses)} poses refused: {problem}; '
                                 'the previous reference stays')
-        self._path_status_pub.publish(path_answer(msg, topic, problem, ''))
+        key = (path_stamp(msg.header.stamp), msg.header.frame_id, len(msg.poses))
+        self._answer_path(key, path_answer(msg, topic, problem, ''))
+
+    def _answer_path(self, key: tuple, answer: DiagnosticStatus) -> None:
+        """Publish ``answer`` and keep it for a repeat of the same path (``key``)."""
+        self._last_path = (key, answer)
+        self._path_status_pub.publish(answer)
 
     def _on_clock(self, msg: Clock) -> None:
         """tick_source sim_clock: one step per simulated step, at its time."""
@@ -673,7 +696,6 @@ class ControllerNode(SchemaLifecycleNode):
                 if self.context.ok():
                     raise
         self.stop()
-        self._input_executor.remove_node(self._inputs)
         self._inputs.destroy_node()
         return super().destroy_node()
 

@@ -2,10 +2,13 @@
 The publishing of ``nfmr-publish-path``: a path file's points sent once to a controller.
 
 The path goes out on ``reference_path_in`` (reliable, transient local) once a controller is
-there: a node that answers on ``reference_path_status`` and subscribes to the path topic,
-matched with this publisher. The command ends when the controller's answer to this path
-(the same header stamp) arrives: taken, or refused with its reason. A subscriber that only
-listens (a recorder, a viewer) is no controller: its acknowledgement means nothing here.
+there: a node that answers on ``reference_path_status`` and subscribes to the path topic.
+The command ends when the controller's answer to this path (the same header stamp) arrives:
+taken, or refused with its reason. Until then the same message is sent again every
+RESEND_PERIOD: a controller whose subscription matched this publisher only after the first
+send gets it then, and one that had it answers again without taking it twice. A subscriber
+that only listens (a recorder, a viewer) is no controller: its acknowledgement means nothing
+here.
 """
 
 from dataclasses import dataclass
@@ -28,6 +31,8 @@ PATH_OUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: Longest wall time [s] between two looks at a stop request while waiting.
 _POLL_S = 0.02
+#: Wall time [s] after which an unanswered path is sent again (the same message).
+RESEND_PERIOD = 0.5
 
 
 def status_topic(path_topic: str) -> str:
@@ -107,11 +112,10 @@ def publish_path(points, options: PublishOptions) -> PublishResult:
         node.create_subscription(DiagnosticStatus, answer_topic, answers.append,
                                  PATH_STATUS_QOS)
         deadline = time.monotonic() + options.timeout
-        # A controller in the graph, and every subscriber of the graph matched with this
-        # publisher (so the controller's is), and its answers matched with this subscriber.
+        # A controller in the graph, a subscriber matched with this publisher, and the
+        # answers' publisher matched with this subscriber.
         while not (_controllers(node, path_topic, answer_topic)
-                   and publisher.get_subscription_count()
-                   >= len(node.get_subscriptions_info_by_topic(path_topic))
+                   and publisher.get_subscription_count() > 0
                    and node.count_publishers(answer_topic) > 0):
             stop.check()
             if time.monotonic() >= deadline:
@@ -123,7 +127,8 @@ def publish_path(points, options: PublishOptions) -> PublishResult:
         msg = points_path(points, node.get_clock().now().to_msg(), options.frame)
         stamp = path_stamp(msg.header.stamp)
         publisher.publish(msg)
-        deadline = time.monotonic() + options.timeout
+        sent = time.monotonic()
+        deadline = sent + options.timeout
         while True:
             for status in answers:
                 values = {kv.key: kv.value for kv in status.values}
@@ -136,6 +141,9 @@ def publish_path(points, options: PublishOptions) -> PublishResult:
                     f'the path was published on {path_topic} but no controller answered on '
                     f'{answer_topic} within {options.timeout:g} s (it is not active, or too '
                     'busy)'))
+            if time.monotonic() - sent >= RESEND_PERIOD:
+                publisher.publish(msg)
+                sent = time.monotonic()
             rclpy.spin_once(node, timeout_sec=_POLL_S)
     finally:
         stop.release()
