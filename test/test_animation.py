@@ -11,8 +11,6 @@ import numpy as np
 from PIL import Image
 import pytest
 
-pytestmark = pytest.mark.long
-
 
 def _line_series(duration_s=10.0, speed=0.4):
     """Return a run along the x axis at ``speed`` [m/s], the wheels swinging +-0.5 rad."""
@@ -50,6 +48,7 @@ def default_gif(tmp_path_factory):
     return path, count
 
 
+@pytest.mark.long
 def test_default_playback_is_four_times_real_time_at_10_fps(default_gif):
     path, count = default_gif
     frames, durations = _frames(path)
@@ -59,6 +58,7 @@ def test_default_playback_is_four_times_real_time_at_10_fps(default_gif):
     assert frames[0].shape == (480, 640, 3)
 
 
+@pytest.mark.long
 def test_frame_count_and_duration_follow_the_config(tmp_path):
     config = AnimationConfig(speed=2.5, fps=5.0, width_px=320, height_px=240)
     path = tmp_path / 'slow.gif'
@@ -74,6 +74,7 @@ def test_frame_times_step_by_speed_over_fps():
     np.testing.assert_allclose(times, np.arange(26) * 0.4, atol=1e-12)
 
 
+@pytest.mark.long
 def test_the_robot_moves_across_a_fixed_view(tmp_path):
     path = tmp_path / 'fixed.gif'
     animate_run(_line_series(), path, AnimationConfig(view_width_m=None, width_px=320,
@@ -85,6 +86,7 @@ def test_the_robot_moves_across_a_fixed_view(tmp_path):
     assert np.any(frames[0] != frames[-1])
 
 
+@pytest.mark.long
 def test_the_view_follows_the_robot(default_gif):
     frames, _ = _frames(default_gif[0])
     centroids = [_chassis_centroid(f) for f in (frames[0], frames[12], frames[-1])]
@@ -118,6 +120,7 @@ def test_an_mp4_without_ffmpeg_names_the_missing_writer(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.long
 def test_save_frame_writes_a_png_of_the_requested_size(tmp_path):
     config = AnimationConfig(width_px=400, height_px=300, view_width_m=None)
     series = _line_series()

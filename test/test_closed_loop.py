@@ -12,8 +12,6 @@ from nfmr_dlsmc.plants.kinematic import simulate
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.long
-
 EPS = 0.01  # [rad]
 CASE2_X0 = (1.0, 1.0, math.pi / 6)
 
@@ -29,6 +27,7 @@ def case2():
                     disturbance=paper_disturbance())
 
 
+@pytest.mark.long
 def test_case1_reproduces_table2_dlsmc_row(case1):
     m = simulation_metrics(case1)
     assert m.iae == pytest.approx(13.5757, rel=0.025)
@@ -37,11 +36,13 @@ def test_case1_reproduces_table2_dlsmc_row(case1):
     assert m.t_conv == pytest.approx(7.1, abs=0.3)
 
 
+@pytest.mark.long
 def test_case1_inputs_respect_limits(case1):
     assert np.all(case1.v >= 0.2) and np.all(case1.v <= 2.0)
     assert np.all(np.abs(case1.omega) <= 1.59)
 
 
+@pytest.mark.long
 def test_case1_exercises_the_barrier_fallback_and_still_converges(case1):
     phase = case1.telemetry['inner_phase']
     fallbacks = np.flatnonzero((phase[:-1] == BARRIER_PHASE) & (phase[1:] == INTEGRAL_PHASE))
@@ -56,6 +57,7 @@ def _first_inner_convergence(result) -> int:
     return int(hits[0])
 
 
+@pytest.mark.long
 def test_case2_theta_e_stays_in_band_outside_the_pulses(case2):
     t, theta_e = case2.t, case2.telemetry['theta_e']
     start = _first_inner_convergence(case2)
@@ -69,6 +71,7 @@ def test_case2_theta_e_stays_in_band_outside_the_pulses(case2):
     assert np.max(np.abs(theta_e[during])) < EPS
 
 
+@pytest.mark.long
 def test_case2_inputs_respect_limits(case2):
     assert np.all(np.abs(case2.omega) <= 1.59)
     assert np.all(case2.v >= 0.2) and np.all(case2.v <= 2.0)
@@ -78,6 +81,7 @@ def test_case2_inputs_respect_limits(case2):
 STARTS = [(1.0, 4.0, 0.0), (-2.0, -1.0, math.pi), (3.0, -2.0, -2.0)]
 
 
+@pytest.mark.long
 @pytest.mark.parametrize('name', ['sine', 'circle', 'line', 'lemniscate'])
 @pytest.mark.parametrize('x0', STARTS[1:])
 def test_theorems_hold_across_trajectories_and_starts(name, x0):

@@ -15,8 +15,6 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.long
-
 #: The hold figures every run of results.json carries.
 HOLD_KEYS = ('t_conv_1cm', 'hold_distance_p99', 'hold_theta_e_p99', 'hold_omega_tv',
              'hold_omega_saturated', 'hold_steer_rate_max', 'hold_steer_joint_rate_max')
@@ -56,6 +54,7 @@ def test_gains_file_errors(tmp_path, text, match):
         load_gain_blocks(path)
 
 
+@pytest.mark.long
 def test_dlsmc_built_by_name_is_the_paper_controller():
     result = run_scenario('dlsmc', {}, CASE1_LONGITUDINAL)
     assert simulation_metrics(result).iae == pytest.approx(13.5757, rel=0.02)
@@ -92,6 +91,7 @@ def test_tuning_candidates_are_seeded_within_range_and_start_at_the_defaults():
         build_controller('dntsmc', block)  # every candidate is a valid gain set
 
 
+@pytest.mark.long
 def test_tuning_score_is_the_table_criterion():
     score = baseline_tuning.score('btintsmc_crsmc', {})
     result = run_scenario('btintsmc_crsmc', {}, CASE2)
@@ -136,6 +136,7 @@ def report(tmp_path_factory):
     return out
 
 
+@pytest.mark.long
 def test_report_results_are_keyed_by_case_start_and_controller(report):
     document = json.loads((report / 'results.json').read_text())
     assert document['plant'] == 'kinematic'
@@ -155,6 +156,7 @@ def test_report_results_are_keyed_by_case_start_and_controller(report):
         simulation_metrics(result).iae, rel=1e-12)
 
 
+@pytest.mark.long
 def test_report_tables_print_the_results(report):
     document = json.loads((report / 'results.json').read_text())
     text = (report / 'report.md').read_text()
@@ -166,6 +168,7 @@ def test_report_tables_print_the_results(report):
     assert text.count('reproduced**') == 4
 
 
+@pytest.mark.long
 def test_kinematic_report_has_the_hold_tables_and_the_robot_profile(report):
     document = json.loads((report / 'results.json').read_text())
     text = (report / 'report.md').read_text()
@@ -182,6 +185,7 @@ def test_kinematic_report_has_the_hold_tables_and_the_robot_profile(report):
     assert '## Which laws hold up on the robot' not in text
 
 
+@pytest.mark.long
 def test_report_figures_are_pngs_and_referenced(report):
     text = (report / 'report.md').read_text()
     pngs = sorted(report.glob('fig*.png'))
@@ -205,6 +209,7 @@ def pybullet_report(tmp_path_factory):
     return out
 
 
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.sim
 def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_report):
@@ -222,6 +227,7 @@ def test_pybullet_results_keep_their_shape_without_the_ratio_runs(pybullet_repor
                 assert figures['hold_steer_joint_rate_max'] is not None  # measured joints
 
 
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.sim
 def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybullet_report):
@@ -238,6 +244,7 @@ def test_on_the_chassis_the_robot_profile_holds_and_the_paper_law_chatters(pybul
     assert case1['dlsmc']['hold_steer_joint_rate_max'] > 15.0  # at the 20 rad/s cap
 
 
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.sim
 def test_with_sensing_every_law_sees_the_robots_odometry(tmp_path, pybullet_report):
@@ -264,6 +271,7 @@ def test_sensing_on_the_kinematic_plant_is_refused(capsys):
     assert '--sensing applies to --plant pybullet' in capsys.readouterr().err
 
 
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.sim
 def test_pybullet_report_says_what_the_paper_values_are(pybullet_report):
@@ -312,6 +320,7 @@ def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
     assert 'csmc' not in written  # tuned blocks come only from this search
 
 
+@pytest.mark.long
 def test_along_a_path_every_law_follows_it_and_arrives_by_the_same_rule(tmp_path):
     out = tmp_path / 'report'
     path = shipped_config('paths/warehouse_loop.csv')

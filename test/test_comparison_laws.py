@@ -43,8 +43,6 @@ from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.long
-
 DT = 0.001
 WIDE = InputLimits(v_min=1e-6, v_max=1e6, omega_max=1e6)  # saturation out of the way
 
@@ -159,6 +157,7 @@ def test_btsmc_outer_has_a_linear_reaching_law():
     assert u_x == pytest.approx(0.5 - 1.5 * s_x - 0.6)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize('name', CONTROLLER_NAMES)
 def test_inputs_respect_the_limits(name):
     limits = InputLimits(v_min=0.2, v_max=1.0, omega_max=0.8)
@@ -177,6 +176,7 @@ def test_inputs_respect_the_limits(name):
 BENIGN_BOUND = {'pure_pursuit': 0.02, 'dsmc': 0.5}
 
 
+@pytest.mark.long
 @pytest.mark.parametrize('name', [n for n in CONTROLLER_NAMES if n != 'pid'])
 def test_converges_from_a_benign_start_with_the_shipped_gains(name):
     blocks = load_gain_blocks(shipped_config('comparison.yaml'))
@@ -197,6 +197,7 @@ def test_single_loop_telemetry_names_match_values():
     assert math.isnan(values['theta_d']) and math.isnan(values['theta_e'])
 
 
+@pytest.mark.long
 def test_pid_converges_onto_a_line_at_its_own_speed():
     # Constant speed and no feed-forward: the PID's benign case is a straight reference
     # driven at v_c, started 0.3 m beside it.

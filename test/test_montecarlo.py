@@ -15,8 +15,6 @@ from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.long
-
 ROBOT = 'config/robot_case1.yaml'
 
 
@@ -25,6 +23,7 @@ def _summary(capsys, *argv) -> dict:
     return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
 
 
+@pytest.mark.long
 @pytest.mark.sim
 def test_pybullet_success_rate_is_that_of_the_starts(capsys):
     # Seed 5 in +-1 m, +-0.3 rad: one start is within 1 cm at 2.4 s, the other (ahead of
@@ -46,6 +45,7 @@ def test_pybullet_success_rate_is_that_of_the_starts(capsys):
     assert summary['iae']['count'] == 2
 
 
+@pytest.mark.long
 def test_kinematic_robot_profile_runs_start_by_start(capsys):
     summary = _summary(capsys, '--params', ROBOT, '--n', '3', '--seed', '1', '--duration',
                        '20', '--x0-range', '1,1,0.3', '--jobs', '2')
@@ -62,6 +62,7 @@ def test_kinematic_robot_profile_runs_start_by_start(capsys):
     assert summary['success_rate'] == np.mean([run['success'] for run in summary['runs']])
 
 
+@pytest.mark.long
 def test_paper_law_keeps_the_batch_and_its_summary(capsys):
     summary = _summary(capsys, '--n', '4', '--duration', '20', '--x0-range', '1,1,0.3')
     assert summary['plant'] == 'kinematic'
@@ -70,6 +71,7 @@ def test_paper_law_keeps_the_batch_and_its_summary(capsys):
     assert all(math.isfinite(run['iae']) for run in summary['runs'])
 
 
+@pytest.mark.long
 def test_along_a_path_success_is_arriving_and_each_start_ends_as_it_does_alone(
         capsys, tmp_path):
     from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, with_arrival

@@ -616,3 +616,48 @@ def test_any_finite_numbers_give_a_finite_reference_or_a_parameter_error(points,
     t = np.linspace(-1.0, traj.duration + 1.0, 50)
     for value in traj.sample(t) + traj.acceleration(t) + (traj.length, traj.duration):
         assert np.all(np.isfinite(value))
+
+
+# -- edges of the interface -----------------------------------------------------------------
+
+def test_a_start_speed_equal_to_the_cruise_speed_is_allowed():
+    profile = PathProfile(speed=0.4, start_speed=0.4)
+    traj = PathTrajectory.from_points([(0.0, 0.0), (3.0, 0.0)], profile)
+    assert traj.sample(0.0)[2] == pytest.approx(0.4, abs=1e-9)
+    assert traj.sample(-1.0)[:3] == pytest.approx((-0.4, 0.0, 0.4), abs=1e-9)
+    with pytest.raises(ParameterError, match='start_speed = 0.41 m/s: must be <= '):
+        PathProfile(speed=0.4, start_speed=0.41)
+
+
+def test_stamped_points_keep_the_stamps_only_when_they_differ():
+    xy = [(0.0, 0.0), (1.0, 0.0), (1.0, 2.0)]
+    same = stamped_points(xy, [7.0, 7.0, 7.0])
+    assert same.shape == (3, 2) and np.array_equal(same, np.array(xy))
+    timed = stamped_points(xy, [10.0, 12.0, 15.5])
+    np.testing.assert_array_equal(timed, [(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (5.5, 1.0, 2.0)])
+    assert stamped_points([], []).shape == (0, 2)
+
+
+def test_the_repr_says_whether_the_path_is_timed():
+    timed = PathTrajectory.from_points(TIMED, PathProfile(corner_radius=0.0))
+    assert repr(timed).startswith('PathTrajectory(timed, 5 points, length ')
+    assert repr(timed).endswith(', duration 9.000 s)')
+    plain = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0)])
+    assert repr(plain) == (f'PathTrajectory(2 points, length 2.000 m, duration '
+                           f'{plain.duration:.3f} s)')
+
+
+def test_the_geometry_is_clamped_to_the_path_and_its_curvature_signed():
+    # Left, then right: kappa > 0 in the first corner, < 0 in the second (radius 0.5 m).
+    traj = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (4.0, 2.0)],
+                                      PathProfile(corner_radius=0.5))
+    s = np.linspace(0.0, traj.length, 4001)
+    x, y, yaw, kappa = traj.geometry(s)
+    first, second = x < 2.0 + 1e-9, x > 2.0 + 1e-9
+    assert kappa[first & (y < 1.0)].max() > 1.5 and kappa[second].min() < -1.5
+    assert kappa.max() <= 2.0 / 0.5 and kappa.min() >= -2.0 / 0.5
+    for outside, inside in ((-1.0, 0.0), (traj.length + 1.0, traj.length)):
+        assert np.array_equal(np.array(traj.geometry(outside)), np.array(traj.geometry(inside)))
+    assert traj.geometry(traj.length)[:3] == pytest.approx((4.0, 2.0, 0.0), abs=1e-9)
+    assert traj.end_pose == pytest.approx((4.0, 2.0, 0.0), abs=1e-9)
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)

@@ -252,3 +252,242 @@ def test_bad_settings_name_the_parameter(name, value):
     with pytest.raises(ParameterError) as info:
         EstimatorConfig(**{name: value})
     assert info.value.parameter == f'estimator.{name}'
+
+
+# -- the filter's equations, one at a time --------------------------------------------------
+
+#: Walks of their own size each, so that a process-noise term in the wrong place shows.
+WALKS = {'position_walk': 0.02, 'yaw_walk': 0.03, 'speed_bias_walk': 0.004,
+         'yaw_rate_bias_walk': 0.005}
+
+
+def spd(seed, n=5):
+    """Return a random symmetric positive definite n x n matrix with cross terms."""
+    a = np.random.default_rng(seed).normal(size=(n, n))
+    return a @ a.T + 0.1 * np.eye(n)
+
+
+@pytest.mark.parametrize('theta', [0.7, 2.5, -2.0, -0.4])
+def test_the_prediction_is_forward_euler_of_eq3_with_the_biases(theta):
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, **WALKS))
+    x = np.array([0.3, -0.2, theta, 0.02, -0.01])
+    dt = 0.01
+    predicted, noise = estimator._propagate(x, np.zeros((5, 5)), (0.5, 0.3), dt)
+    v, w = 0.5 + 0.02, 0.3 - 0.01  # the command plus the biases
+    assert predicted == pytest.approx([0.3 + v * math.cos(theta) * dt,
+                                       -0.2 + v * math.sin(theta) * dt, theta + w * dt,
+                                       0.02, -0.01], abs=1e-15)
+    # From an exact state the covariance is the process noise of dt alone.
+    np.testing.assert_allclose(noise, np.diag([0.02 ** 2, 0.02 ** 2, 0.03 ** 2, 0.004 ** 2,
+                                               0.005 ** 2]) * dt, rtol=1e-12, atol=0.0)
+
+
+@pytest.mark.parametrize('theta', [0.7, 2.5, -2.0, -0.4])
+def test_the_covariance_is_propagated_with_the_jacobian_of_the_prediction(theta):
+    # The EKF's linearisation F against a central difference of the prediction itself:
+    # P' - Q dt = F P F^T must be J P J^T for the numerical Jacobian J, for any P.
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, **WALKS))
+    x = np.array([0.3, -0.2, theta, 0.02, -0.01])
+    u, dt, h = (0.5, 0.3), 0.05, 1e-6
+    zero = np.zeros((5, 5))
+    jacobian = np.empty((5, 5))
+    for j in range(5):
+        step = np.zeros(5)
+        step[j] = h
+        ahead = estimator._propagate(x + step, zero, u, dt)[0]
+        behind = estimator._propagate(x - step, zero, u, dt)[0]
+        jacobian[:, j] = (ahead - behind) / (2.0 * h)
+    assert np.abs(jacobian - np.eye(5)).max() > 0.01  # the motion couples the states
+    noise = estimator._propagate(x, zero, u, dt)[1]
+    for seed in range(3):
+        prior = spd(seed)
+        _, posterior = estimator._propagate(x, prior, u, dt)
+        np.testing.assert_allclose(posterior - noise, jacobian @ prior @ jacobian.T,
+                                   rtol=0.0, atol=1e-8)
+
+
+def kalman_update(x, P, z, R):
+    """Return the textbook update of (x, P) by a pose z = H x + noise R, H = [I 0]."""
+    H = np.hstack([np.eye(3), np.zeros((3, 2))])
+    nu = np.subtract(z, H @ x)
+    nu[2] = (nu[2] + math.pi) % (2.0 * math.pi) - math.pi
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    return x + K @ nu, (np.eye(5) - K @ H) @ P
+
+
+@pytest.mark.parametrize('z', [(0.35, -0.1, 0.75), (0.2, -0.3, 0.6 + 2.0 * math.pi),
+                               (0.3, -0.2, 0.7 - 2.0 * math.pi + 0.05)],
+                         ids=['plain', 'yaw-a-turn-above', 'yaw-a-turn-below'])
+def test_the_update_is_the_kalman_update_of_the_pose_with_the_yaw_wrapped(z):
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    x = np.array([0.3, -0.2, 0.7, 0.02, -0.01])
+    P = 0.01 * spd(4)
+    R = np.diag([0.02, 0.03, 0.04])
+    got_x, got_P = estimator._update(x, P, (z, R))
+    want_x, want_P = kalman_update(x, P, z, R)
+    np.testing.assert_allclose(got_x, want_x, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(got_P, want_P, rtol=0.0, atol=1e-12)
+    assert abs(got_x[2] - x[2]) < 0.1  # the yaw moved by its wrapped innovation only
+
+
+@pytest.mark.parametrize('gate', [4.0, 0.5])
+def test_the_innovation_gate_widens_the_pose_prior_until_the_innovation_lies_on_it(gate):
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, innovation_gate=gate))
+    x = np.array([0.3, -0.2, 0.7, 0.02, -0.01])
+    P = 0.001 * spd(5)
+    R = np.diag([0.002, 0.003, 0.001])
+    S = P[:3, :3] + R
+    for scale, beyond in ((0.01, False), (1.0, True)):
+        nu = scale * np.array([0.3, -0.2, 0.1])
+        z = tuple(x[:3] + nu)
+        d = float(nu @ np.linalg.solve(S, nu))
+        assert (d > gate) == beyond
+        widened = P.copy()
+        if beyond:  # P_pose' = (d / g) S - R: nu^T S'^-1 nu = g
+            widened[:3, :3] = (d / gate) * S - R
+            assert float(nu @ np.linalg.solve(widened[:3, :3] + R, nu)) == pytest.approx(gate)
+        got_x, got_P = estimator._update(x, P, (z, R))
+        want_x, want_P = kalman_update(x, widened, z, R)
+        np.testing.assert_allclose(got_x, want_x, rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(got_P, want_P, rtol=0.0, atol=1e-12)
+        ungated = PoseEstimator(EstimatorConfig(enabled=True))._update(x, P, (z, R))
+        # Beyond the gate the update follows the message further than the plain one.
+        assert (np.linalg.norm(got_x[:3] - z) < np.linalg.norm(ungated[0][:3] - z)) == beyond
+
+
+def test_no_bias_before_the_first_message_and_commands_before_it_are_ignored():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, **WALKS))
+    assert estimator.bias == (0.0, 0.0)
+    estimator.command(1.0, 1.0)  # no tick yet: nothing to drive
+    estimator.measure(0.0, 1.0, 2.0, 0.3, (0.0, 0.0))
+    assert estimator.ready
+    assert estimator.pose(0.0) == (1.0, 2.0, 0.3)
+    assert estimator.pose(0.01) == pytest.approx((1.0, 2.0, 0.3), abs=1e-15)  # at rest
+
+
+def test_a_message_stamped_between_two_ticks_is_fused_at_its_stamp():
+    # Exact odometry at 1.5 ms, between the ticks at 1 and 2 ms, arriving before the second:
+    # the estimate there is the message predicted over the 0.5 ms since with the command.
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    estimator.measure(0.0, 0.0, 0.0, 0.0, (0.0, 0.0))
+    for t in (0.0, 0.001):
+        estimator.pose(t)
+        estimator.command(0.5, 0.2)
+    estimator.measure(0.0015, 1.0, 2.0, 0.3, (0.0, 0.0))
+    x, y, theta = estimator.pose(0.002)
+    step = 0.002 - 0.0015
+    assert (x, y, theta) == pytest.approx((1.0 + 0.5 * math.cos(0.3) * step,
+                                           2.0 + 0.5 * math.sin(0.3) * step,
+                                           0.3 + 0.2 * step), abs=1e-9)
+    assert estimator.fused == 2 and estimator.out_of_order == 0
+
+
+def test_a_message_of_an_infinite_yaw_or_an_infinite_time_leaves_no_estimate():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    estimator.measure(0.0, 1.0, 2.0, 0.3)
+    assert estimator.pose(0.0) == pytest.approx((1.0, 2.0, 0.3))
+    estimator.measure(0.001, 1.0, 2.0, math.inf)
+    assert all(math.isnan(v) for v in estimator.pose(0.001))
+    assert all(math.isnan(v) for v in estimator.pose(0.002))  # and stays so
+    estimator.reset()
+    estimator.measure(0.0, 1.0, 2.0, 0.3)
+    estimator.pose(0.0)
+    assert all(math.isnan(v) for v in estimator.pose(math.inf))
+
+
+@pytest.mark.parametrize('stamp', [0.0005, 0.0015, 0.0205, 50 * DT],
+                         ids=['first-tick', 'second-tick', 'later', 'the-last-tick'])
+def test_a_late_message_is_fused_as_if_it_had_come_in_time(stamp):
+    # The same message, once in time (before the tick after its stamp) and once 50 ms late:
+    # replayed from the tick before its stamp, the late one ends in the same estimate, also
+    # when that tick is the first or the second one kept.
+    estimators = [PoseEstimator(EstimatorConfig(enabled=True, **WALKS)) for _ in range(2)]
+    message = (stamp, 0.01, 0.02, 0.05, (0.002, 0.002))
+    for estimator in estimators:
+        estimator.measure(0.0, 0.0, 0.0, 0.0, (0.001, 0.001))
+    for k in range(51):
+        t = k * DT
+        if t >= stamp and not estimators[0].fused == 2:
+            estimators[0].measure(*message)  # in time
+        for estimator in estimators:
+            estimator.pose(t)
+            estimator.command(0.5, 0.2)
+    assert estimators[1].measure(*message)  # late
+    assert estimators[0].fused == estimators[1].fused == 2
+    in_time, late = (estimator.pose(0.051) for estimator in estimators)
+    np.testing.assert_allclose(late, in_time, rtol=0.0, atol=1e-12)
+    assert abs(in_time[1] - 0.0) > 1e-3  # the message moved it
+
+
+def test_the_smoothed_position_starts_at_the_estimate_and_holds_on_a_repeated_tick():
+    # Away from the origin (x != y != t): at the first tick the position handed on is the
+    # estimate's; after a message 1 mm to the side it takes the step up over tau, and the
+    # same tick asked again returns the same position, not the estimate.
+    tau = 0.005
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, correction_smoothing=tau))
+    estimator.measure(0.0, 5.0, -3.0, 0.4, (0.001, 0.001))
+    assert estimator.pose(0.0) == pytest.approx((5.0, -3.0, 0.4), abs=1e-15)
+    estimator.command(0.0, 0.0)
+    estimator.measure(0.001, 5.0, -2.999, 0.4, (0.001, 0.001))
+    plain = PoseEstimator(EstimatorConfig(enabled=True))
+    plain.measure(0.0, 5.0, -3.0, 0.4, (0.001, 0.001))
+    plain.pose(0.0)
+    plain.command(0.0, 0.0)
+    plain.measure(0.001, 5.0, -2.999, 0.4, (0.001, 0.001))
+    first = estimator.pose(0.001)
+    estimate = plain.pose(0.001)
+    gain = -math.expm1(-0.001 / tau)
+    assert first[1] == pytest.approx(-3.0 + gain * (estimate[1] + 3.0), abs=1e-15)
+    assert first[0] == pytest.approx(5.0, abs=1e-15) and first[2] == estimate[2]
+    assert estimate[1] + 3.0 > 1e-4  # a step the smoothing takes up
+    assert estimator.pose(0.001) == first
+
+
+def test_the_history_keeps_the_tick_at_its_horizon_and_the_counters_count_each_message():
+    # Ticks every 2^-10 s, a history of 1/8 s: at t = 1 s the oldest tick kept is the one
+    # at 7/8 s (binary fractions: the bound is exact). A message stamped there is fused, one
+    # a hair older is dropped; each drop and each message out of order is counted.
+    step = 2.0 ** -10
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, history=0.125))
+    estimator.measure(0.0, 0.0, 0.0, 0.0)
+    for k in range(1025):
+        estimator.pose(k * step)
+        estimator.command(0.1, 0.0)
+    assert estimator.measure(0.875, 0.0875, 0.0, 0.0)
+    assert estimator.out_of_order == 0  # the newest message so far
+    assert not estimator.measure(0.875 - 2.0 ** -20, 0.0875, 0.0, 0.0)
+    assert not estimator.measure(0.5, 0.05, 0.0, 0.0)
+    assert estimator.too_old == 2 and estimator.fused == 2
+    assert estimator.measure(0.9, 0.09, 0.0, 0.0)
+    assert estimator.measure(0.9, 0.09, 0.0, 0.0)  # the same stamp again: not out of order
+    assert estimator.out_of_order == 2  # the two dropped ones were older than 0.875 s
+    assert estimator.measure(0.95, 0.095, 0.0, 0.0) and estimator.measure(0.93, 0.093, 0, 0)
+    assert estimator.out_of_order == 3 and estimator.fused == 6
+
+
+def test_between_messages_the_smoothed_position_moves_with_the_estimate_and_its_speed_bias():
+    # Straight on at a speed 1 cm/s above the command, learnt as the speed bias: once the
+    # messages stop, the estimate moves by (v + b_v) dt a tick, and so must the smoothed
+    # position, its remaining gap to the estimate shrinking by exp(-dt / tau) a tick.
+    tau = 0.005
+    walks = {'enabled': True, 'position_walk': 3e-5, 'yaw_walk': 3e-5, 'speed_bias_walk': 0.003}
+    smooth = PoseEstimator(EstimatorConfig(**walks, correction_smoothing=tau))
+    plain = PoseEstimator(EstimatorConfig(**walks))
+    rng = np.random.default_rng(7)
+    gaps = []
+    for k in range(1060):
+        t = k * DT
+        if k % 10 == 0 and k < 1000:
+            z = (0.5 * t + rng.normal(0, 0.001), rng.normal(0, 0.001), rng.normal(0, 0.001))
+            for estimator in (smooth, plain):
+                estimator.measure(t, *z, (0.001, 0.001))
+        p, e = smooth.pose(t), plain.pose(t)
+        for estimator in (smooth, plain):
+            estimator.command(0.49, 0.0)
+        if k >= 1000:
+            gaps.append(np.subtract(e[:2], p[:2]))
+    assert plain.bias[0] == pytest.approx(0.01, abs=3e-3)
+    gaps = np.array(gaps)
+    assert np.abs(gaps[0]).max() > 1e-6  # a gap left by the last message's step
+    np.testing.assert_allclose(gaps[1:], gaps[:-1] * math.exp(-DT / tau), rtol=0.0,
+                               atol=1e-12)
