@@ -65,49 +65,64 @@ def test_a_listener_that_is_no_controller_does_not_count_as_taking_the_path():
     assert 'no controller on /listened_path_in within 1 s' in done.stderr, done.stderr
 
 
+class ControllerAtRest:
+    """A controller in this process, its odometry a robot at rest at (1, 4) facing +x."""
+
+    def __init__(self):
+        self.context = new_context()
+        self.controller = ControllerNode(context=self.context)
+        self.peer = Node('odometry', context=self.context)
+        self._odom = self.peer.create_publisher(Odometry, 'odom', QOS)
+        self.states = []
+        self.peer.create_subscription(Float64MultiArray, 'controller_state', self.states.append,
+                                      QOS)
+        self._spinner = Spinner(self.context, self.controller, self.peer)
+        self.controller.start()
+        wait_matched(self._odom)
+
+    def send(self, t: float) -> None:
+        """Send the odometry of time ``t`` [s]; wait for the controller's state."""
+        msg = Odometry()
+        msg.header.frame_id = 'odom'
+        msg.header.stamp.sec, msg.header.stamp.nanosec = 0, int(t * 1e9)
+        msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
+        msg.pose.pose.orientation.w = 1.0
+        n = len(self.states)
+        self._odom.publish(msg)
+        wait_for(lambda: len(self.states) > n, what='a controller reply')
+
+    def close(self) -> None:
+        self._spinner.close()
+        self.controller.destroy_node()
+        self.peer.destroy_node()
+        self.context.try_shutdown()
+
+
+@pytest.fixture
+def at_rest():
+    robot = ControllerAtRest()
+    yield robot
+    robot.close()
+
+
 @pytest.mark.ros
-def test_a_running_controller_follows_the_published_file(tmp_path):
+def test_a_running_controller_follows_the_published_file(tmp_path, at_rest):
     file = tmp_path / 'ahead.csv'
     file.write_text('x,y\n1.0,4.0\n3.0,4.0\n3.0,6.0\n')
-    context = new_context()
-    controller = ControllerNode(context=context)
-    peer = Node('odometry', context=context)
-    odom = peer.create_publisher(Odometry, 'odom', QOS)
-    states = []
-    peer.create_subscription(Float64MultiArray, 'controller_state', states.append, QOS)
-    spinner = Spinner(context, controller, peer)
-    try:
-        controller.start()
-        wait_matched(odom)
-
-        def send(t):
-            msg = Odometry()
-            msg.header.frame_id = 'odom'
-            msg.header.stamp.sec, msg.header.stamp.nanosec = 0, int(t * 1e9)
-            msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
-            msg.pose.pose.orientation.w = 1.0
-            n = len(states)
-            odom.publish(msg)
-            wait_for(lambda: len(states) > n, what='a controller reply')
-
-        send(0.0)
-        done = run(str(file))
-        assert done.returncode == 0, done.stderr
-        assert done.stdout.startswith(f'nfmr-publish-path: 3 points (untimed) of {file} '
-                                      'taken on reference_path_in: following a new path from '
-                                      'the next tick: '), done.stdout
-        wait_for(lambda: controller.session.params.trajectory_name == 'path' or
-                 controller.session._next_reference is not None, what='the path taken')
-        send(0.001)
-        labels = states[0].layout.dim[0].label.split(',')
-        last = dict(zip(labels, states[-1].data))
-        assert last['t'] == 0.0 and (last['x_d'], last['y_d']) == pytest.approx((1.0, 4.0))
-        assert controller.session.params.trajectory.end_pose[:2] == pytest.approx((3.0, 6.0))
-    finally:
-        spinner.close()
-        controller.destroy_node()
-        peer.destroy_node()
-        context.try_shutdown()
+    controller, states = at_rest.controller, at_rest.states
+    at_rest.send(0.0)
+    done = run(str(file))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f'nfmr-publish-path: 3 points (untimed) of {file} '
+                                  'taken on reference_path_in: following a new path from '
+                                  'the next tick: '), done.stdout
+    wait_for(lambda: controller.session.params.trajectory_name == 'path' or
+             controller.session._next_reference is not None, what='the path taken')
+    at_rest.send(0.001)
+    labels = states[0].layout.dim[0].label.split(',')
+    last = dict(zip(labels, states[-1].data))
+    assert last['t'] == 0.0 and (last['x_d'], last['y_d']) == pytest.approx((1.0, 4.0))
+    assert controller.session.params.trajectory.end_pose[:2] == pytest.approx((3.0, 6.0))
 
 
 @pytest.mark.ros
@@ -115,34 +130,16 @@ def test_a_running_controller_follows_the_published_file(tmp_path):
     ((), 'x,y\n66.0,4.0\n68.0,4.0\n', 'refused: its first point'),
     (('--frame', 'map'), 'x,y\n1.0,4.0\n3.0,4.0\n', "refused: it is in frame(s) 'map'"),
 ])
-def test_a_path_the_controller_refuses_is_exit_1_with_its_reason(tmp_path, args, text, says):
+def test_a_path_the_controller_refuses_is_exit_1_with_its_reason(tmp_path, at_rest, args, text,
+                                                                 says):
     file = tmp_path / 'path.csv'
     file.write_text(text)
-    context = new_context()
-    controller = ControllerNode(context=context)
-    peer = Node('odometry', context=context)
-    odom = peer.create_publisher(Odometry, 'odom', QOS)
-    states = []
-    peer.create_subscription(Float64MultiArray, 'controller_state', states.append, QOS)
-    spinner = Spinner(context, controller, peer)
-    try:
-        controller.start()
-        wait_matched(odom)
-        msg = Odometry()
-        msg.header.frame_id = 'odom'
-        msg.pose.pose.position.x, msg.pose.pose.position.y = 1.0, 4.0
-        msg.pose.pose.orientation.w = 1.0
-        odom.publish(msg)
-        wait_for(lambda: states, what='a controller reply')
-        trajectory = controller.session.params.trajectory
-        done = run(str(file), *args)
-        assert done.returncode == 1, done.stdout
-        assert done.stderr.startswith(f'nfmr-publish-path: {says}'), done.stderr
-        assert done.stderr.count('\n') == 1
-        assert controller.session.params.trajectory is trajectory
-        assert controller.session._next_reference is None
-    finally:
-        spinner.close()
-        controller.destroy_node()
-        peer.destroy_node()
-        context.try_shutdown()
+    controller = at_rest.controller
+    at_rest.send(0.0)
+    trajectory = controller.session.params.trajectory
+    done = run(str(file), *args)
+    assert done.returncode == 1, done.stdout
+    assert done.stderr.startswith(f'nfmr-publish-path: {says}'), done.stderr
+    assert done.stderr.count('\n') == 1
+    assert controller.session.params.trajectory is trajectory
+    assert controller.session._next_reference is None
