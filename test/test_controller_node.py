@@ -8,7 +8,7 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path as PathMessage
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.ros.controller_node import ControllerNode
+from nfmr_dlsmc.ros.controller_node import ControllerNode, path_stamp
 from nfmr_dlsmc.runtime.params import controller_parameters
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS as STATE_LABELS
 import numpy as np
@@ -422,6 +422,41 @@ def test_a_restarted_odometry_source_starts_tracking_over(setup):
     assert node.session.restarts == 1
 
 
+class PathSender:
+    """
+    Sends paths on ``reference_path_in`` as ``nfmr-publish-path`` does.
+
+    Each one again every 0.5 s until the controller's answer to it comes on
+    ``reference_path_status``.
+
+    A path published once can be lost: volatile, it reaches only the subscriptions matched
+    by then, and a publisher's matched count may count another participant's.
+    """
+
+    def __init__(self, peer):
+        self.answers = []
+        self.publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
+        self.status = peer.create_subscription(DiagnosticStatus, 'reference_path_status',
+                                               self.answers.append, QOS)
+        wait_matched(self.publisher, self.status)
+
+    def send(self, message, timeout=30.0):
+        """Publish ``message`` until answered; return the answer."""
+        wanted = {'stamp': path_stamp(message.header.stamp), 'frame': message.header.frame_id,
+                  'poses': str(len(message.poses))}
+        seen = len(self.answers)
+        deadline = time.monotonic() + timeout
+        while True:
+            self.publisher.publish(message)
+            resend = time.monotonic() + 0.5
+            while time.monotonic() < resend:
+                for answer in self.answers[seen:]:
+                    if {kv.key: kv.value for kv in answer.values} == wanted:
+                        return answer
+                assert time.monotonic() < deadline, f'no answer to {wanted} in {timeout} s'
+                time.sleep(0.002)
+
+
 def path_message(points, frame='odom', stamps=None):
     msg = PathMessage()
     msg.header.frame_id = frame
@@ -438,39 +473,46 @@ def path_message(points, frame='odom', stamps=None):
 
 def test_each_path_is_answered_on_the_status_topic_and_a_repeat_is_not_taken_twice(setup, log):
     node, peer = setup()
-    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
-    answers = []
-    status = peer.create_subscription(DiagnosticStatus, 'reference_path_status', answers.append,
-                                      QOS)
-    wait_matched(publisher, status)
+    sender = PathSender(peer)
     drive(peer, 5)
     refused = path_message([(6.0, 4.0), (8.0, 4.0)])
     refused.header.stamp.sec = 7
-    publisher.publish(refused)
-    wait_for(lambda: len(answers) == 1, what='the answer to the refused path')
-    assert answers[0].level == DiagnosticStatus.ERROR
-    assert answers[0].message.startswith('refused: its first point')
-    assert {kv.key: kv.value for kv in answers[0].values} == {
+    answer = sender.send(refused)
+    assert answer.level == DiagnosticStatus.ERROR
+    assert answer.message.startswith('refused: its first point')
+    assert {kv.key: kv.value for kv in answer.values} == {
         'stamp': '7.000000000', 'frame': 'odom', 'poses': '2'}
     taken = path_message([(1.0, 4.0), (3.0, 4.0), (3.0, 6.0)], stamps=[0.0] * 3)
     taken.header.stamp.sec = 8
-    for k in (2, 3):  # sent twice, as a sender repeats it until answered
-        publisher.publish(taken)
-        wait_for(lambda: len(answers) == k, what=f'answer {k}')
-    assert answers[1] == answers[2] and answers[1].level == DiagnosticStatus.OK
-    assert answers[1].message.startswith('following a new path from the next tick: 3 points')
+    first = sender.send(taken)
+    n = len(sender.answers)
+    sender.publisher.publish(taken)  # again, as a sender repeats it until answered
+    wait_for(lambda: len(sender.answers) > n, what='the answer to the repeat')
+    assert sender.answers[-1] == first and first.level == DiagnosticStatus.OK
+    assert first.message.startswith('following a new path from the next tick: 3 points')
     assert sum('following a new path' in m for m in log.read()) == 1  # taken once
+
+
+def test_two_unstamped_paths_of_as_many_poses_are_each_judged_on_their_own(setup, log):
+    # Not repeats: a script publishing raw Paths leaves the header stamp at 0.
+    node, peer = setup()
+    sender = PathSender(peer)
+    drive(peer, 5)
+    far = sender.send(path_message([(6.0, 4.0), (8.0, 4.0)]))
+    near = sender.send(path_message([(1.0, 4.0), (3.0, 4.0)]))
+    assert far.level == DiagnosticStatus.ERROR and near.level == DiagnosticStatus.OK
+    assert sum('following a new path' in m for m in log.read()) == 1
 
 
 def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_published(
         setup, log):
     node, peer = setup()
-    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
+    sender = PathSender(peer)
     followed = []
     watcher = peer.create_subscription(PathMessage, 'reference_path', followed.append,
                                        QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                                                   durability=DurabilityPolicy.TRANSIENT_LOCAL))
-    wait_matched(publisher, watcher)
+    wait_matched(watcher)
     wait_for(lambda: followed, what="the trajectory's reference_path")
     drive(peer, 5)
     labels = peer.states[0][1].layout.dim[0].label.split(',')
@@ -480,8 +522,8 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
                  'stamps must increase'),
                 (path_message([(6.0, 4.0), (8.0, 4.0)]), 'more than max_start_distance = 1 m')]
     for k, (message, says) in enumerate(refusals):
-        publisher.publish(message)
-        wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1, timeout=30.0,
+        assert says in sender.send(message).message
+        wait_for(lambda: sum('refused' in m for m in log.read()) == k + 1,
                  what=f'refusal {k + 1} ({says})', seen=lambda: log.lines)
         assert says in log.lines[-1] and 'the previous reference stays' in log.lines[-1]
     drive(peer, 5, start_t=0.005)
@@ -493,7 +535,7 @@ def test_a_path_on_reference_path_in_is_followed_from_the_next_tick_and_publishe
         return [(p.pose.position.x, p.pose.position.y) for p in path.poses]
 
     assert all(where(path) == where(followed[0]) for path in followed)
-    publisher.publish(path_message([(1.0, 4.0), (3.0, 4.0), (3.0, 6.0)], stamps=[0.0] * 3))
+    sender.send(path_message([(1.0, 4.0), (3.0, 4.0), (3.0, 6.0)], stamps=[0.0] * 3))
     wait_for(lambda: where(followed[-1]) != where(followed[0]),
              what='the new path on reference_path')
     assert any('following a new path from the next tick: 3 points' in m for m in log.read())
@@ -534,11 +576,10 @@ def test_arrival_is_logged_once_and_named_on_diagnostics(setup, log):
     node, peer = setup()
     diagnostics = []
     peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
-    publisher = peer.create_publisher(PathMessage, 'reference_path_in', QOS)
-    wait_matched(publisher)
+    sender = PathSender(peer)
     drive(peer, 1)
-    publisher.publish(path_message([(1.0, 4.0), (1.02, 4.0)]))  # 2 cm ahead
-    wait_for(lambda: any('following a new path' in m for m in log.read()), what='the path')
+    taken = sender.send(path_message([(1.0, 4.0), (1.02, 4.0)]))  # 2 cm ahead
+    assert taken.level == DiagnosticStatus.OK, taken.message
     labels = peer.states[0][1].layout.dim[0].label.split(',')
     pose, t = (1.0, 4.0, 0.0), 0.001
     while True:  # a robot that is where the reference was one tick before

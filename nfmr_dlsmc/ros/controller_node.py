@@ -24,9 +24,9 @@ refused in one logged line, and the previous reference stays. Each path taken or
 is answered on ``reference_path_status`` (diagnostic_msgs/DiagnosticStatus, reliable,
 volatile): level OK when taken, ERROR when refused, the message saying what was taken or
 why not, and the values ``stamp`` (the path's header stamp, ``sec.nanosec``), ``frame`` and
-``poses``, by which a sender knows the answer is to its path (:func:`path_answer`). A path
-received again with the same stamp, frame and number of poses (a sender that repeats it
-until answered) is answered again, not taken again.
+``poses``, by which a sender knows the answer is to its path (:func:`path_answer`). The same
+path received again, pose for pose (a sender that repeats it until answered), is answered
+again, not taken again (:func:`path_identity`).
 
 Lifecycle (``rclpy.lifecycle``; ``ros2 lifecycle set /controller <transition>``):
 
@@ -125,6 +125,21 @@ def path_stamp(stamp) -> str:
     return f'{stamp.sec}.{stamp.nanosec:09d}'
 
 
+def path_identity(msg: Path) -> tuple:
+    """
+    Return what makes a received path the same as one answered before: all of it.
+
+    The header stamp and frame, and each pose's stamp, frame, position and orientation. A
+    sender that resends until answered sends the same message; two different paths that
+    share a header stamp (an unstamped one, say) and a number of poses are not repeats.
+    """
+    return (path_stamp(msg.header.stamp), msg.header.frame_id, tuple(
+        (p.header.stamp.sec, p.header.stamp.nanosec, p.header.frame_id,
+         p.pose.position.x, p.pose.position.y, p.pose.position.z, p.pose.orientation.x,
+         p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w)
+        for p in msg.poses))
+
+
 def path_answer(msg: Path, topic: str, problem: str | None, summary: str) -> DiagnosticStatus:
     """
     Return the answer on ``reference_path_status`` to the path ``msg`` received on ``topic``.
@@ -206,7 +221,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._active_timers = []  # the watchdog and the markers, while active
         self._held_steer = None  # steer angles [rad] last commanded, held by a zero command
         self._reference = None  # (x_d [m], y_d [m], theta_d [rad]) of the latest tick
-        self._last_path = None  # (stamp, frame, poses) of the last path answered, its answer
+        self._last_path = None  # path_identity of the last path answered, its answer
         self._stats = None
         self._clock_rate = ClockRateWatch()  # tick_source clock: odometry's pace against ours
         self._state_layout = [MultiArrayDimension(
@@ -465,7 +480,7 @@ class ControllerNode(SchemaLifecycleNode):
         frames = {msg.header.frame_id} | {p.header.frame_id for p in msg.poses} - {''}
         session = self.session
         topic = self._path_sub.topic_name if self._path_sub is not None else 'reference_path_in'
-        key = (path_stamp(msg.header.stamp), msg.header.frame_id, len(msg.poses))
+        key = path_identity(msg)
         if self._last_path is not None and self._last_path[0] == key:
             self._path_status_pub.publish(self._last_path[1])  # a repeat: answered again
             return
@@ -496,8 +511,7 @@ class ControllerNode(SchemaLifecycleNode):
         """Log and answer the refusal of the path ``msg``; the previous reference stays."""
         self.get_logger().error(f'{topic}: path of {len(msg.poses)} poses refused: {problem}; '
                                 'the previous reference stays')
-        key = (path_stamp(msg.header.stamp), msg.header.frame_id, len(msg.poses))
-        self._answer_path(key, path_answer(msg, topic, problem, ''))
+        self._answer_path(path_identity(msg), path_answer(msg, topic, problem, ''))
 
     def _answer_path(self, key: tuple, answer: DiagnosticStatus) -> None:
         """Publish ``answer`` and keep it for a repeat of the same path (``key``)."""
