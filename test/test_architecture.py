@@ -185,3 +185,17 @@ def test_package_xml_lists_every_dependency_the_code_may_import():
     needed = {ROSDEP_KEYS.get(name, name) for names in THIRD_PARTY.values() for name in names}
     assert needed - listed == set()
     assert listed - needed == set()  # and nothing the code does not import
+
+
+#: Cyclomatic complexity allowed in the functions of the 1 kHz step (radon's measure).
+STEP_FUNCTIONS = {'nfmr_dlsmc/runtime/tracking_session.py': ('tick', 'on_odometry'),
+                  'nfmr_dlsmc/runtime/odometry_gate.py': ('offer',)}
+
+
+@pytest.mark.parametrize('path, names', STEP_FUNCTIONS.items())
+def test_the_control_step_reads_in_one_go(path, names):
+    from radon.complexity import cc_visit
+
+    blocks = {b.name: b.complexity for b in cc_visit((ROOT / path).read_text())
+              for b in [b, *getattr(b, 'methods', [])]}
+    assert {n: blocks[n] for n in names if blocks[n] > 12} == {}

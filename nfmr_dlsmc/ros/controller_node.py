@@ -436,8 +436,7 @@ class ControllerNode(SchemaLifecycleNode):
             self._values = candidate
             if self.session is not None:
                 self.session.set_params(params)
-                for name, value in options.items():
-                    setattr(self.session, name, value)
+                self.session.set_options(**options)
         if new_frame and self._active:
             self._publish_path()  # in the frame odometry is now expected in
         return SetParametersResult(successful=True)

@@ -13,6 +13,7 @@ commands since predicted), otherwise the latest odometry.
 
 from dataclasses import dataclass, replace
 import math
+from typing import NamedTuple
 
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, check_goal_reach, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
@@ -21,22 +22,55 @@ from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.runtime.odometry_gate import OdometryGate, OdometryRules
 from nfmr_dlsmc.runtime.params import ControllerParams, PATH
 import numpy as np
 
-#: Field names of :attr:`TickOutput.state`, in order (the ``controller_state`` layout).
-STATE_FIELDS = ('t', 'x', 'y', 'theta', 'x_d', 'y_d', 'theta_r', 'x_e', 'y_e', 'theta_d',
-                'theta_e', 's_x', 's_y', 'eta_hat', 'inner_phase', 'v', 'omega', 'v_raw',
-                'omega_raw', 'v_saturated', 'omega_saturated', 'steer_limited', 'stopped',
-                'steer_fl', 'steer_fr', 'steer_rl', 'steer_rr', 'control_time', 'arrival')
+
+class StateRow(NamedTuple):
+    """
+    One tick as the node publishes it on ``controller_state`` (its layout's labels).
+
+    Pose and reference of P, the law's inner signals (of the DLSMC; NaN for another law),
+    the commands before and after saturation, the steer angles and the arrival outcome.
+    """
+
+    t: float  #: trajectory time [s]
+    x: float  #: pose of P the law saw [m]
+    y: float  #: [m]
+    theta: float  #: [rad]
+    x_d: float  #: reference [m]
+    y_d: float  #: [m]
+    theta_r: float  #: reference heading [rad]
+    x_e: float  #: position errors in the world frame [m]
+    y_e: float  #: [m]
+    theta_d: float  #: heading the outer loop asks for [rad]
+    theta_e: float  #: heading error s_theta [rad]
+    s_x: float  #: outer sliding variables [m]
+    s_y: float  #: [m]
+    eta_hat: float  #: inner adaptive gain
+    inner_phase: float  #: inner loop's phase (0 integral, 1 barrier)
+    v: float  #: speed command [m/s]
+    omega: float  #: yaw-rate command [rad/s]
+    v_raw: float  #: before saturation [m/s]
+    omega_raw: float  #: [rad/s]
+    v_saturated: float  #: 1.0 when saturated
+    omega_saturated: float  #: 1.0 when saturated
+    steer_limited: float  #: 1.0 when the steer angle limit cut the command
+    stopped: float  #: 1.0 when safety stopped the robot
+    steer_fl: float  #: steer angles [rad]
+    steer_fr: float
+    steer_rl: float
+    steer_rr: float
+    control_time: float  #: the tick's control clock [s]
+    arrival: float  #: arrival outcome (a key of ARRIVAL_OUTCOMES; 0 while tracking)
 
 
-def _fixed(value: float, decimals: int, signed: bool = False) -> str:
-    """Return ``value`` with ``decimals`` decimals, or in exponent form beyond 1e12."""
-    sign = '+' if signed else ''
-    if abs(value) < 1e12:
-        return f'{value:{sign}.{decimals}f}'
-    return f'{value:{sign}.{decimals + 3}e}'
+#: Field names of :class:`StateRow`, in order (the ``controller_state`` layout).
+STATE_FIELDS = StateRow._fields
+#: The law's inner signals in :class:`StateRow`.
+_LAW_FIELDS = ('x_e', 'y_e', 'theta_d', 'theta_e', 's_x', 's_y', 'eta_hat', 'inner_phase',
+               'v_raw', 'omega_raw', 'v_saturated', 'omega_saturated')
 
 
 @dataclass(frozen=True)
@@ -52,8 +86,8 @@ class TickOutput:
         Steer angles [rad], FL FR RL RR.
     wheel_speed : ndarray (4,)
         Wheel speeds [rad/s], FL FR RL RR.
-    state : tuple of float
-        The values named by :data:`STATE_FIELDS`.
+    state : StateRow
+        The tick as published.
     stopped : bool
         True when safety stopped the robot.
     report : str or None
@@ -65,9 +99,19 @@ class TickOutput:
     omega: float
     steer: np.ndarray
     wheel_speed: np.ndarray
-    state: tuple
+    state: StateRow
     stopped: bool
     report: str | None
+
+
+def _law_state(law) -> dict:
+    """Return the DLSMC's inner signals of :class:`StateRow`; NaN for another law."""
+    if not isinstance(law, DlsmcController):
+        return dict.fromkeys(_LAW_FIELDS, math.nan)
+    return dict(zip(_LAW_FIELDS, (
+        law.x_e, law.y_e, law.theta_d, law.s_theta, law.outer.s_x, law.outer.s_y,
+        law.inner.eta_hat, float(law.inner.phase), law.v_raw, law.omega_raw,
+        float(law.v_saturated), float(law.omega_saturated))))
 
 
 class TrackingSession:
@@ -98,42 +142,42 @@ class TrackingSession:
     max_start_distance : float
         A path given to :meth:`path_reference` whose first point is farther than this [m]
         from the robot is refused.
+    law : object, optional
+        The tracking law, with the interface of
+        :class:`~nfmr_dlsmc.core.dlsmc.DlsmcController` (``reset``, ``step``); the DLSMC of
+        ``params.dlsmc`` by default. The state row holds the DLSMC's inner signals, NaN for
+        another law.
 
     """
 
     def __init__(self, params: ControllerParams, odom_timeout: float, odom_frame: str = 'odom',
                  max_jump: float = 10.0, restart_threshold: float = 1.0,
-                 confirm_messages: int = 3, max_start_distance: float = 1.0):
+                 confirm_messages: int = 3, max_start_distance: float = 1.0, law=None):
         self.params = params
-        self.odom_timeout = odom_timeout
+        self.gate = OdometryGate(OdometryRules(odom_timeout, odom_frame, max_jump,
+                                               restart_threshold, confirm_messages))
         self.max_start_distance = max_start_distance
-        self.odom_frame = odom_frame
-        self.max_jump = max_jump
-        self.restart_threshold = restart_threshold
-        if isinstance(confirm_messages, bool) or not isinstance(confirm_messages, int) \
-                or confirm_messages < 1:
-            raise ValueError(f'confirm_messages = {confirm_messages!r}: must be an integer >= 1')
-        self.confirm_messages = confirm_messages
-        self._new_base = []  # (stamp, control time) [s] of messages off the time base
-        self.law = DlsmcController(params.dlsmc)
+        self.law = DlsmcController(params.dlsmc) if law is None else law
         # A path: the law inside the rule that stops at its end (core/arrival.py).
         self.controller = with_arrival(self.law, params.trajectory, params.arrival)
         self._outcome = 0.0  # the arrival outcome last reported
         self.estimator = PoseEstimator(params.estimator) if params.estimator.enabled else None
-        self._pose = None  # latest valid (x, y, theta)
-        self._pose_wall = None  # wall time [s] it arrived
-        self._bad_odometry = None  # (kind, reason) while the latest odometry is invalid
-        self._stamp = None  # stamp [s] of the latest accepted odometry
         self.restarts = 0
         self._t0 = None  # control time [s] of the first valid odometry
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
         self._tracked_last = False  # whether the previous tick tracked (for the step length)
         self._steer = np.zeros(4)
         self._v = 0.0  # speed [m/s] last commanded
-        self._fault_reported = None
+        self._reported = None  # the fault kind last reported (None: tracking)
+        self._restart_pending = False  # a restart happened, not reported yet
         self._next_reference = None  # a path to follow from the next tick
         self._received = False  # whether the reference is a path received while running
         self._new_origin = False  # whether the next tick that tracks is trajectory time 0
+
+    @property
+    def odom_timeout(self) -> float:
+        """Odometry older than this [s] stops the robot."""
+        return self.gate.rules.timeout
 
     @property
     def started(self) -> bool:
@@ -148,6 +192,20 @@ class TrackingSession:
         self.law.config = params.dlsmc
         if self.estimator is not None:
             self.estimator.config = params.estimator
+
+    def set_options(self, max_start_distance: float | None = None, **rules) -> None:
+        """
+        Take new session options from now on; those not given stay.
+
+        The keywords are the constructor's: ``max_start_distance`` and the odometry rules
+        ``odom_timeout``, ``odom_frame``, ``max_jump``, ``restart_threshold``,
+        ``confirm_messages``.
+        """
+        names = {'odom_timeout': 'timeout', 'odom_frame': 'frame'}
+        self.gate.rules = replace(self.gate.rules,
+                                  **{names.get(k, k): v for k, v in rules.items()})
+        if max_start_distance is not None:
+            self.max_start_distance = max_start_distance
 
     def path_reference(self, points) -> PathTrajectory:
         """
@@ -174,14 +232,15 @@ class TrackingSession:
             check_goal_reach(reference, self.params.arrival)
         except ParameterError as exc:
             raise PathError(str(exc)) from None
-        if self._pose is not None:
+        pose = self.gate.pose
+        if pose is not None:
             x0, y0, _ = reference.start_pose
-            distance = math.hypot(x0 - self._pose[0], y0 - self._pose[1])
+            distance = math.hypot(x0 - pose[0], y0 - pose[1])
             if distance > self.max_start_distance:
                 raise PathError(f'its first point ({x0:.2f}, {y0:.2f}) m is {distance:.2f} m '
-                                f'from the robot at ({self._pose[0]:.2f}, '
-                                f'{self._pose[1]:.2f}) m: more than max_start_distance = '
-                                f'{self.max_start_distance:g} m', 0, (x0, y0))
+                                f'from the robot at ({pose[0]:.2f}, {pose[1]:.2f}) m: more '
+                                f'than max_start_distance = {self.max_start_distance:g} m',
+                                0, (x0, y0))
         return reference
 
     def replace_reference(self, reference: PathTrajectory) -> None:
@@ -213,9 +272,10 @@ class TrackingSession:
         """
         Take odometry of P: pose [m, m, rad], ``stamp`` and ``frame_id``.
 
-        It was received at ``wall_time`` / ``control_time`` [s]. With the estimator on, it is
-        fused at its stamp (``sigma``: its position and yaw standard deviations, from its
-        covariance, see :meth:`PoseEstimator.measure`).
+        It was received at ``wall_time`` / ``control_time`` [s]; :class:`OdometryGate`
+        judges it. With the estimator on, a message taken is fused at its stamp
+        (``sigma``: its position and yaw standard deviations, from its covariance, see
+        :meth:`PoseEstimator.measure`).
 
         Returns
         -------
@@ -225,93 +285,86 @@ class TrackingSession:
 
         """
         stamp = control_time if stamp is None else stamp
-        if frame_id is not None and frame_id != self.odom_frame:
-            self._bad_odometry = ('frame', f'odometry is in frame {frame_id!r}, '
-                                           f'expected {self.odom_frame!r}')
+        verdict = self.gate.offer(x, y, theta, wall_time, control_time, stamp, frame_id)
+        if verdict is None:
+            return False
+        if not verdict.taken:
             return True
-        if not all(math.isfinite(v) for v in (x, y, theta, stamp)):
-            self._bad_odometry = ('finite', f'odometry is not finite or its orientation is no '
-                                            f'rotation: x, y, yaw = ({x}, {y}, {theta})')
-            return True
-        restarting = False
-        if self._stamp is not None:
-            gap = stamp - self._stamp
-            if -self.restart_threshold < gap < 0.0:
-                return False  # out of order: ignore
-            if abs(gap) >= self.restart_threshold:
-                if not self._confirms_new_base(stamp, control_time):
-                    self._bad_odometry = ('stamp', f'odometry stamp {_fixed(stamp, 3)} s is '
-                                                   f'{_fixed(gap, 3, signed=True)} s from the '
-                                                   'last accepted one: ignored until '
-                                                   f'{self.confirm_messages} messages in a row '
-                                                   'confirm a new time base')
-                    return True
-                restarting = gap < 0.0
-                control_time = self._new_base[0][1]
-                if not restarting and self._t0 is not None:
-                    # A gap in the source's clock is no time the robot lived through:
-                    # trajectory time goes on from the last tick that tracked.
-                    self._t0 = control_time - self._t
-            self._new_base = []
-        if restarting:
+        if verdict.restarted:
             self._restart()
-        elif self._pose is not None:
-            jump = math.hypot(x - self._pose[0], y - self._pose[1])
-            if jump > self.max_jump:
-                self._bad_odometry = ('jump', f'odometry jumped {_fixed(jump, 2)} m in one '
-                                              f'message (limit {self.max_jump:g} m)')
-                return True
-        self._bad_odometry = None
-        self._pose = (x, y, theta)
-        self._pose_wall = wall_time
-        self._stamp = stamp
+        elif verdict.gap and self._t0 is not None:
+            # A gap in the source's clock is no time the robot lived through: trajectory
+            # time goes on from the last tick that tracked.
+            self._t0 = verdict.control_time - self._t
         if self.estimator is not None:
             self.estimator.measure(stamp, x, y, theta, sigma)
         if self._t0 is None:
-            self._t0 = control_time
+            self._t0 = verdict.control_time
         return True
-
-    def _confirms_new_base(self, stamp: float, control_time: float) -> bool:
-        """Collect a message off the time base; True once enough continue the same base."""
-        base = self._new_base
-        if base and not 0.0 <= stamp - base[-1][0] < self.restart_threshold:
-            base.clear()  # not the same new base: start collecting again
-        base.append((stamp, control_time))
-        return len(base) >= self.confirm_messages
 
     def _restart(self) -> None:
         """Start tracking over: the odometry source started over."""
         self.controller.reset()
         if self.estimator is not None:
             self.estimator.reset()
-        self._pose = self._t0 = None
+        self._t0 = None
         self._new_origin = False
         self._t = 0.0
         self._tracked_last = False
-        self._fault_reported = ('restart', self.restarts)
+        self._restart_pending = True
         self.restarts += 1
 
     def odometry_age(self, wall_time: float) -> float:
         """Return the wall time [s] since the latest valid odometry (inf before any)."""
-        return math.inf if self._pose_wall is None else wall_time - self._pose_wall
-
-    def _fault(self, wall_time: float) -> tuple | None:
-        """Return (kind, reason) of what stops the robot now, or None."""
-        if self._bad_odometry is not None:
-            return self._bad_odometry
-        age = self.odometry_age(wall_time)
-        if age > self.odom_timeout:
-            return 'stale', f'odometry is {age:.3f} s old (timeout {self.odom_timeout:g} s)'
-        return None
+        return self.gate.age(wall_time)
 
     def _inputs(self, control_time: float, t: float) -> tuple:
         """Return the pose (x, y, theta) and the reference at trajectory time ``t`` [s]."""
         x_d, y_d, xdot_d, ydot_d = (float(v) for v in self.params.trajectory.sample(t))
         xddot_d, yddot_d = (float(v) for v in self.params.trajectory.acceleration(t))
-        x, y, theta = self._pose
+        x, y, theta = self.gate.pose
         if self.estimator is not None:
-            x, y, theta = self.estimator.pose(control_time) or self._pose
+            x, y, theta = self.estimator.pose(control_time) or self.gate.pose
         return (x, y, theta), (x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d)
+
+    def _report(self, fault: tuple | None) -> str | None:
+        """Return the line to log when the safety state changed (each fault once)."""
+        kind = None if fault is None else fault[0]
+        if kind == self._reported and not (self._restart_pending and fault is None):
+            return None
+        previous, self._reported = self._reported, kind
+        if fault:
+            return f'stopping the robot: {fault[1]}'
+        if self._restart_pending:
+            self._restart_pending = False
+            return 'odometry restarted (its stamps went back): tracking starts over'
+        if previous == 'finite':
+            return 'the pose estimate and the reference are finite: tracking resumed'
+        return 'valid odometry: tracking resumed'
+
+    def _step_length(self, t: float, tracking: bool) -> float | None:
+        """
+        Return the measured step [s] to trajectory time ``t``, None for the nominal one.
+
+        So that a jittery loop integrates over the time that passed; the nominal period
+        for the first tick after a start or a stop.
+        """
+        previous_t = self._t if self._tracked_last else None
+        self._t, self._tracked_last = t, tracking
+        step = None if previous_t is None else t - previous_t
+        return step if step is not None and 0.0 < step <= 100.0 * self.params.dlsmc.dt \
+            else None
+
+    def _arrival_report(self, t: float) -> str | None:
+        """Return the line to log when the arrival outcome changed."""
+        outcome = getattr(self.controller, 'outcome', 0.0)
+        if outcome == self._outcome:
+            return None
+        self._outcome = outcome
+        return (f'{ARRIVAL_OUTCOMES[outcome]} at t = {t:.3f} s: '
+                f'{1e3 * self.controller.position_error:.1f} mm and '
+                f'{1e3 * abs(self.controller.yaw_error):.1f} mrad from the goal; '
+                'zero speed until a new reference')
 
     def tick(self, control_time: float, wall_time: float) -> TickOutput | None:
         """Return the command for this tick, or None before the first valid odometry."""
@@ -320,14 +373,13 @@ class TrackingSession:
             self._next_reference = None
         if self._t0 is None:
             return None
-        fault = self._fault(wall_time)
+        fault = self.gate.fault(wall_time)
         if self._new_origin and not fault:
             self._t0, self._new_origin = control_time, False
         # A stopped robot reports where tracking stopped.
         t = self._t if fault else control_time - self._t0
-        (x, y, theta), reference = self._inputs(control_time, t)
-        x_d, y_d, xdot_d, ydot_d, xddot_d, yddot_d = reference
-        if not fault and not all(math.isfinite(v) for v in (x, y, theta, *reference)):
+        pose, reference = self._inputs(control_time, t)
+        if not fault and not all(math.isfinite(v) for v in (*pose, *reference)):
             # A tick at an absurd time: the estimate or the reference there overflows. The
             # estimator starts again from the next odometry rather than from that overflow.
             fault = ('finite', f'the pose estimate or the reference at t = {t:g} s is not '
@@ -335,34 +387,26 @@ class TrackingSession:
             t = self._t
             if self.estimator is not None:
                 self.estimator.reset()
-        kind = None if fault is None else fault[0]
-        report = None
-        if kind != self._fault_reported:  # log each fault once, not each tick it lasts
-            if fault:
-                report = f'stopping the robot: {fault[1]}'
-            elif isinstance(self._fault_reported, tuple):
-                report = 'odometry restarted (its stamps went back): tracking starts over'
-            elif self._fault_reported == 'finite':
-                report = 'the pose estimate and the reference are finite: tracking resumed'
-            else:
-                report = 'valid odometry: tracking resumed'
-            self._fault_reported = kind
-        previous_t = self._t if self._tracked_last else None
-        self._t = t
-        self._tracked_last = not fault
-        # The measured step, so that a jittery loop integrates over the time that passed;
-        # the nominal period for the first tick after a start or a stop.
-        step = None if previous_t is None else t - previous_t
-        if step is not None and not 0.0 < step <= 100.0 * self.params.dlsmc.dt:
-            step = None
-        ctrl = self.law
+        report = self._report(fault)
+        step = self._step_length(t, not fault)
+        v, omega, steer, wheels, limited = self._command(fault, pose, reference, step)
+        arrived = self._arrival_report(t)
+        state = self._state_row(t, pose, reference, v, omega, steer, limited, fault,
+                                control_time)
+        return TickOutput(v, omega, steer, wheels, state, bool(fault), report or arrived)
+
+    def _command(self, fault, pose: tuple, reference: tuple, step: float | None) -> tuple:
+        """
+        Return (v, omega, steer, wheel speeds, steer limited) of the tick.
+
+        Stopped by ``fault``: zero speed, the steering held; else the law's step over
+        ``step`` [s] (None: nominal) mapped to the wheels. The estimator learns the command.
+        """
         if fault:
             v = omega = 0.0
-            steer, wheels = self._steer.copy(), np.zeros(4)
-            limited = False
+            steer, wheels, limited = self._steer.copy(), np.zeros(4), False
         else:
-            v, omega = self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, step,
-                                            xddot_d, yddot_d)
+            v, omega = self.controller.step(*pose, *reference[:4], step, *reference[4:])
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
                                  hold_steer=self._steer)
             steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
@@ -370,21 +414,19 @@ class TrackingSession:
         self._v = v
         if self.estimator is not None:
             self.estimator.command(v, omega)
-        outcome = getattr(self.controller, 'outcome', 0.0)
-        if outcome != self._outcome and report is None:
-            self._outcome = outcome
-            report = (f'{ARRIVAL_OUTCOMES[outcome]} at t = {t:.3f} s: '
-                      f'{1e3 * self.controller.position_error:.1f} mm and '
-                      f'{1e3 * abs(self.controller.yaw_error):.1f} mrad from the goal; '
-                      'zero speed until a new reference')
+        return v, omega, steer, wheels, limited
+
+    def _state_row(self, t: float, pose: tuple, reference: tuple, v: float, omega: float,
+                   steer: np.ndarray, limited: bool, fault, control_time: float) -> StateRow:
+        """Return the tick's :class:`StateRow`."""
         trajectory = self.params.trajectory
         # A path has a heading also where it rests (its start and its goal).
         theta_r = (float(trajectory.heading(t)) if isinstance(trajectory, PathTrajectory)
-                   else float(reference_heading(xdot_d, ydot_d)))
-        state = (t, x, y, theta, x_d, y_d, theta_r,
-                 ctrl.x_e, ctrl.y_e, ctrl.theta_d, ctrl.s_theta, ctrl.outer.s_x, ctrl.outer.s_y,
-                 ctrl.inner.eta_hat, float(ctrl.inner.phase), v, omega, ctrl.v_raw,
-                 ctrl.omega_raw, float(ctrl.v_saturated), float(ctrl.omega_saturated),
-                 float(limited), float(bool(fault))) + tuple(steer.tolist()) + (
-                     float(control_time), outcome)
-        return TickOutput(v, omega, steer, wheels, state, bool(fault), report)
+                   else float(reference_heading(reference[2], reference[3])))
+        fl, fr, rl, rr = steer.tolist()
+        return StateRow(
+            t=t, x=pose[0], y=pose[1], theta=pose[2], x_d=reference[0], y_d=reference[1],
+            theta_r=theta_r, v=v, omega=omega, steer_limited=float(limited),
+            stopped=float(bool(fault)), steer_fl=fl, steer_fr=fr, steer_rl=rl, steer_rr=rr,
+            control_time=float(control_time), arrival=getattr(self.controller, 'outcome', 0.0),
+            **_law_state(self.law))
