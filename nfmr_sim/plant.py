@@ -1,19 +1,21 @@
 """
-Closed loop of any controller on the pybullet 4WIS chassis, in one process, without ROS.
+Closed loop of the tracking session on the pybullet 4WIS chassis, in one process, without ROS.
 
-The same :class:`~nfmr_sim.world.ChassisWorld` and the same wheel mapping
-(:func:`~nfmr_dlsmc.core.steering.wheel_commands`) as the sim and controller nodes, stepped in
-lockstep: per physics step the controller sees the odometry of P and the reference at that
-instant, its (v, omega) is mapped to four steer angles and four wheel speeds, and the world
-advances one step. The result has the shape of the kinematic simulator's
-(:class:`~nfmr_dlsmc.plants.kinematic.SimResult`), so the same metrics apply.
+The same :class:`~nfmr_sim.world.ChassisWorld` as the sim node and the same
+:class:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession` as the controller node (odometry
+checks, pose estimator, arrival rule, safety stop, steer hold, wheel mapping), stepped in
+lockstep as ``nfmr-run`` steps them: odometry goes to the session as a message carries it
+(:mod:`~nfmr_dlsmc.runtime.odometry_wire`), the session ticks as the node's ``tick_source``
+would, and its wheel commands drive the next physics step. So a run here and a lockstep run
+over ROS are the same arithmetic, and differ only in transport. The result has the shape
+of the kinematic simulator's (:class:`~nfmr_dlsmc.plants.kinematic.SimResult`), so the same
+metrics apply.
 """
 
 from dataclasses import replace
 import time
 
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
-from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator
 from nfmr_dlsmc.core.steering import (
     geometry_mismatch,
     RobotGeometry,
@@ -21,132 +23,130 @@ from nfmr_dlsmc.core.steering import (
     wheel_commands,
 )
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.plants.kinematic import check_start, sample_reference, SimResult
+from nfmr_dlsmc.plants.kinematic import check_start, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
+from nfmr_dlsmc.runtime.odometry_wire import sent_time, sent_yaw, sigma_from_variances
+from nfmr_dlsmc.runtime.params import lockstep_tick_source
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 from nfmr_sim.sim_params import sim_parameters, sim_settings
-from nfmr_sim.world import ChassisWorld, OdometrySample
+from nfmr_sim.world import ChassisWorld
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
 
 
-def simulate_pybullet(controller, trajectory, x0, duration: float,
+def simulate_pybullet(session: TrackingSession, x0, duration: float,
                       world_config: WorldConfig | None = None,
-                      geometry: RobotGeometry | None = None, steering: SteerMode | None = None,
                       disturbance: YawRateDisturbance | None = None,
-                      progress=None, estimator: EstimatorConfig | None = None) -> SimResult:
+                      progress=None) -> SimResult:
     """
-    Run ``controller`` against the pybullet chassis from pose ``x0`` of P.
+    Run ``session`` against the pybullet chassis from pose ``x0`` of P.
 
     Per physics step k (t_k = k dt, dt = ``world_config.physics_dt``, which must equal the
-    controller's period): the controller sees the pose of P and the reference at t_k and
-    returns (v, omega). The pose is the latest odometry message (the world's odometry model:
-    rate, latency, noise, bias), or with ``estimator`` enabled its estimate at t_k
-    (:class:`~nfmr_dlsmc.core.pose_estimator.PoseEstimator`, fed each message as it arrives
-    and the commands); the yaw-rate disturbance varpi(t_k) is added to omega on the
-    actuator side; (v, omega + varpi) is mapped to the wheels with (j1, j2), the steer
-    angles of wheels that stand still held; the world steps once.
+    control period ``session.params.dlsmc.dt``): the odometry message the world publishes
+    at t_k, if any (its rate, latency, noise and bias; the first at t = 0 before any step,
+    as the sim node sends it), goes to :meth:`TrackingSession.on_odometry`, stamped and
+    oriented as a message carries it; the session ticks at t_k as the controller node's
+    lockstep ``tick_source`` would (:func:`~nfmr_dlsmc.runtime.params.lockstep_tick_source`:
+    on each message, or on each step); its steer angles and wheel speeds, or before the
+    first tick zero speed with the steering held, drive the step. The yaw-rate disturbance
+    varpi(t_k), if any, is added to omega on the actuator side: (v, omega + varpi) mapped
+    again with (j1, j2). Time is the stamps' (integer nanoseconds), as over ROS.
 
     Parameters
     ----------
-    controller
-        As for :func:`~nfmr_dlsmc.plants.kinematic.simulate`.
-    trajectory
-        ``sample(t)`` and ``acceleration(t)`` as for the kinematic simulator.
+    session : TrackingSession
+        Its law, reference (``params.trajectory``), geometry, steering, estimator and
+        odometry rules; fresh (no odometry yet).
     x0 : sequence of 3 floats
         Start pose of P (x [m], y [m], yaw [rad]).
     duration : float
         Simulated time [s].
     world_config : WorldConfig, optional
         The chassis, motors, contacts and the world's own disturbances; its steer mode is
-        replaced by ``steering`` so that P is the point the mapping assumes.
-    geometry : RobotGeometry, optional
-        What the wheel mapping assumes; must match the chassis (default Table 1).
-    steering : SteerMode, optional
-        (j1, j2) of the mapping (default double Ackermann).
+        replaced by the session's so that P is the point the mapping assumes.
     disturbance : YawRateDisturbance, optional
         Yaw-rate pulses added to the commanded omega before the mapping.
     progress : callable, optional
         Called as ``progress(t)`` about once per simulated second.
-    estimator : EstimatorConfig, optional
-        The pose estimator between odometry and the law (off by default).
 
     Returns
     -------
     SimResult
-        ``state`` is the ground truth of P, ``v`` and ``omega`` the commands (omega without
-        the disturbance), ``steer`` the commanded steer angles and ``steer_joint_velocity``
-        the measured steer joint rates [rad/s], FL FR RL RR.
+        ``state`` is the ground truth of P, ``reference`` the session's at each tick,
+        ``v`` and ``omega`` the commands (omega without the disturbance), ``telemetry`` the
+        law's, ``steer`` the commanded steer angles and ``steer_joint_velocity`` the
+        measured steer joint rates [rad/s], FL FR RL RR.
 
     """
-    geometry = RobotGeometry() if geometry is None else geometry
-    steering = SteerMode() if steering is None else steering
+    params = session.params
+    geometry, steering = params.geometry, params.steering
     world_config = WorldConfig() if world_config is None else world_config
     world_config = replace(world_config, steer_mode=steering)
     dt = world_config.physics_dt
-    x0, n = check_start(controller, x0, duration, dt)
+    x0, n = check_start(session.controller, x0, duration, dt)
     chassis = world_config.chassis
     if geometry_mismatch(geometry, chassis) is not None:
         raise ParameterError('geometry', geometry, 'must match the simulated chassis '
                              f'(wheelbase {chassis.wheelbase:g} m, track {chassis.track:g} m, '
                              f'wheel radius {chassis.wheel_radius:g} m)')
-
-    t = np.arange(n) * dt
-    ref, acc = sample_reference(trajectory, t)
-    dist = disturbance.sample(t) if disturbance is not None else np.zeros(n)
-
-    controller.reset()
-    step = controller.step
-    telemetry = controller.telemetry
-    rows = []
-    steer_rows = np.empty((n, 4))
-    joint_rate_rows = np.empty((n, 4))
+    noise = world_config.disturbance
+    per_message = lockstep_tick_source(noise.odom_rate, noise.odom_latency, dt) == 'odom'
+    # What a message's covariance says: the variances of the world's odometry noise.
+    sigma = sigma_from_variances(noise.odom_position_noise ** 2, noise.odom_position_noise ** 2,
+                                 noise.odom_yaw_noise ** 2)
+    dist = disturbance.sample(np.arange(n) * dt) if disturbance is not None else np.zeros(n)
+    fields = session.controller.TELEMETRY_FIELDS
+    t, truth, commands, reference = np.empty(n), np.empty((n, 3)), np.empty((n, 2)), []
+    telemetry, steer_rows, joint_rates = np.empty((n, len(fields))), np.empty((n, 4)), \
+        np.empty((n, 4))
     every = max(1, int(round(1.0 / dt)))
-    hold = np.zeros(4)
+    steer, wheels, v, w, row_t = np.zeros(4), np.zeros(4), 0.0, 0.0, 0.0
     with ChassisWorld(world_config) as world:
         world.reset(x0)
-        out = world.observe()
-        # Before the first message (odometry with latency), the pose P starts from.
-        odom = world.first_odometry() or OdometrySample(0.0, out.point_p)
-        estimate = PoseEstimator(estimator) if estimator and estimator.enabled else None
-        # What an odometry message's covariance says: the noise of the world's odometry.
-        noise = world_config.disturbance
-        sigma = (noise.odom_position_noise, noise.odom_yaw_noise)
-        if estimate is not None:
-            estimate.measure(odom.time, odom.state.x, odom.state.y, odom.state.yaw, sigma)
-        for k, ((x_d, y_d, xdot_d, ydot_d), (xddot_d, yddot_d), varpi) in enumerate(
-                zip(ref.tolist(), acc.tolist(), dist.tolist())):
-            truth = out.point_p
-            if out.odometry is not None:
-                odom = out.odometry
-                if estimate is not None and k:
-                    estimate.measure(odom.time, odom.state.x, odom.state.y, odom.state.yaw,
-                                     sigma)
-            if estimate is None:
-                x, y, yaw = odom.state.x, odom.state.y, odom.state.yaw
-            else:
-                x, y, yaw = estimate.pose(t[k])
-            v, w = step(x, y, yaw, x_d, y_d, xdot_d, ydot_d, None, xddot_d, yddot_d)
-            if estimate is not None:
-                estimate.command(v, w)
-            rows.append((truth.x, truth.y, truth.yaw, v, w) + telemetry())
-            cmd = wheel_commands(v, w + varpi, geometry, steering, hold_steer=hold)
-            hold = cmd.steer
-            steer_rows[k] = cmd.steer
-            joint_rate_rows[k] = out.joint_velocity[:4]
-            world.set_wheel_commands(cmd.steer, cmd.wheel_speed)
+        out = replace(world.observe(), odometry=world.first_odometry())
+        for k, varpi in enumerate(dist.tolist()):
+            now = sent_time(out.time)
+            odom = out.odometry
+            ticked = None
+            if odom is not None:
+                stamp = sent_time(odom.time)
+                taken = session.on_odometry(odom.state.x, odom.state.y,
+                                            sent_yaw(odom.state.yaw), max(now, stamp), stamp,
+                                            stamp, None, sigma)
+                if per_message and taken:
+                    ticked = session.tick(stamp, stamp)
+            if not per_message:
+                ticked = session.tick(now, now)
+            if ticked is not None:
+                v, w, steer, wheels = ticked.v, ticked.omega, ticked.steer, ticked.wheel_speed
+                row_t = ticked.state.t
+                reference.append((row_t, ticked.state.x_d, ticked.state.y_d))
+            else:  # no tick: zero speed, the steering held
+                v = w = 0.0
+                wheels = np.zeros(4)
+                reference.append((row_t, *params.trajectory.sample(row_t)[:2]))
+            if varpi:
+                cmd = wheel_commands(v, w + varpi, geometry, steering, hold_steer=steer)
+                steer, wheels = cmd.steer, cmd.wheel_speed
+            p = out.point_p
+            t[k], truth[k], commands[k] = now, (p.x, p.y, p.yaw), (v, w)
+            telemetry[k] = session.controller.telemetry()
+            steer_rows[k] = steer
+            joint_rates[k] = out.joint_velocity[:4]
+            world.set_wheel_commands(steer, wheels)
             out = world.step()
             if progress is not None and (k + 1) % every == 0:
                 progress(out.time)
         final = out.point_p
-
-    columns = np.array(rows, dtype=float).reshape(n, 5 + len(controller.TELEMETRY_FIELDS)).T
-    state = columns[:3].T.copy()
-    state[:, 2] = np.unwrap(state[:, 2])
+    truth[:, 2] = np.unwrap(truth[:, 2])
+    ref = np.array(reference, dtype=float)
+    velocity = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), ref[:, 0].shape)
+                                for c in params.trajectory.sample(ref[:, 0])[2:]])
     return SimResult(
-        t=t, state=state, reference=ref, v=columns[3], omega=columns[4], disturbance=dist,
-        telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])), dt=dt,
-        final_state=np.array([final.x, final.y, final.yaw]), steer=steer_rows,
-        steer_joint_velocity=joint_rate_rows)
+        t=t, state=truth, reference=np.column_stack([ref[:, 1:], velocity]), v=commands[:, 0],
+        omega=commands[:, 1], disturbance=dist, telemetry=dict(zip(fields, telemetry.T)),
+        dt=dt, final_state=np.array([final.x, final.y, final.yaw]), steer=steer_rows,
+        steer_joint_velocity=joint_rates)
 
 
 def world_rtf(sim_seconds: float) -> dict:

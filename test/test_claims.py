@@ -22,7 +22,11 @@ from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.core.trajectories import Sine
 from nfmr_dlsmc.plants.kinematic import simulate
 from nfmr_dlsmc.ros import controller_node
-from nfmr_dlsmc.runtime.params import controller_parameter_defaults, controller_params
+from nfmr_dlsmc.runtime.params import (
+    controller_parameter_defaults,
+    controller_params,
+    session_options,
+)
 from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 import numpy as np
 import pytest
@@ -319,7 +323,7 @@ def _node_session():
     """Build the session exactly as ControllerNode does from its parameter defaults."""
     values = controller_parameter_defaults()
     session = TrackingSession(controller_params(values),
-                              **controller_node._session_options(values))
+                              **session_options(values))
     return values, session
 
 

@@ -156,7 +156,7 @@ def test_compare_hands_its_preset_to_every_run_and_the_run_to_its_world(monkeypa
         settings = staticmethod(plant.settings)
 
         @staticmethod
-        def simulate(controller, trajectory, x0, duration, world, *rest):
+        def simulate(session, x0, duration, world, *rest):
             seen.append(world)
             raise _Stop
     monkeypatch.setattr(comparison_scenarios, 'robot_plant', lambda name: Spy)

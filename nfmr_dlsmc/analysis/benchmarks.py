@@ -19,18 +19,26 @@ Benchmarks that measure numbers (``nfmr-bench``, ``make bench``); no pass/fail h
 The figures of the running nodes are :mod:`nfmr_dlsmc.ros.bench`'s.
 """
 
+from dataclasses import replace
 import time
 
 from nfmr_dlsmc.analysis.plain_loop import plain_dlsmc_loop
 from nfmr_dlsmc.baselines.registry import build_controller, CONTROLLER_NAMES
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.plants.batch import simulate_batch_parallel
 from nfmr_dlsmc.plants.kinematic import simulate
 from nfmr_dlsmc.plants.registry import robot_plant
-from nfmr_dlsmc.runtime.params import controller_params, load_gain_blocks, load_params_file
+from nfmr_dlsmc.runtime.params import (
+    controller_params,
+    load_gain_blocks,
+    load_params_file,
+    session_options,
+)
 from nfmr_dlsmc.runtime.share import shipped_config
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 import numpy as np
 
 #: Width of the label column of :func:`benchmark_table`.
@@ -114,16 +122,17 @@ def pybullet_closed_loop_rtf(sim_seconds: float) -> dict:
     Return the real-time factor of the robot profile driving the pybullet chassis.
 
     The profile is ``config/robot_case1.yaml`` on Case 1, in one process, lockstep: the
-    registered plant's ``simulate``, the law fed the world's odometry as it is (the profile's
-    pose estimator off).
+    registered plant's ``simulate`` (the controller node's session), the law fed the world's
+    odometry as it is (the profile's pose estimator off).
     """
     plant = robot_plant('pybullet')
     config = shipped_config('robot_case1.yaml')
     params = controller_params(load_params_file(config))
     settings = plant.settings(load_params_file(config, 'sim'))
     start = time.perf_counter()
-    plant.simulate(DlsmcController(params.dlsmc), params.trajectory, settings.initial_pose,
-                   sim_seconds, settings.world, params.geometry, params.steering)
+    params = replace(params, estimator=EstimatorConfig())
+    plant.simulate(TrackingSession(params, **session_options({})), settings.initial_pose,
+                   sim_seconds, settings.world)
     wall = time.perf_counter() - start
     return {'sim_s': sim_seconds, 'wall_s': wall, 'real_time_factor': sim_seconds / wall}
 

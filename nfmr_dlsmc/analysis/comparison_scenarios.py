@@ -12,6 +12,7 @@ import math
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.arrival import ArrivalConfig, with_arrival
 from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
+from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.sensing import with_sensing
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
@@ -20,8 +21,14 @@ from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import SimResult, simulate, with_steer_angles
 from nfmr_dlsmc.plants.registry import robot_plant
-from nfmr_dlsmc.runtime.params import controller_params, load_params_file
+from nfmr_dlsmc.runtime.params import (
+    controller_params,
+    ControllerParams,
+    load_params_file,
+    session_options,
+)
 from nfmr_dlsmc.runtime.share import shipped_config
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 
 #: The plants a scenario runs on: the unicycle model (3), forward Euler; the simulated
 #: 4WIS chassis (Table 1, double Ackermann) in this process.
@@ -105,17 +112,17 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
         raise ParameterError('steering', steering, 'applies to the pybullet plant: the '
                              'kinematic model has no steer motors')
     trajectory = scenario.trajectory or make_trajectory('sine')
-    controller = with_arrival(build_controller(name, block, dt=scenario.dt), trajectory,
-                              scenario.arrival)
+    law = build_controller(name, block, dt=scenario.dt)
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
         flat = {} if sensing is None else with_sensing({}, sensing)
         world = plant_.settings(flat if steering is None
                                 else with_steering(flat, steering)).world
-        estimator = None if sensing is None else robot_estimator()
-        return plant_.simulate(controller, trajectory, scenario.x0, scenario.duration,
-                               world, RobotGeometry(), SteerMode(), scenario.disturbance,
-                               None, estimator)
-    result = simulate(controller, trajectory, scenario.x0, scenario.duration, scenario.dt,
-                      scenario.disturbance)
+        params = ControllerParams(
+            dlsmc=DlsmcConfig(dt=scenario.dt), trajectory=trajectory, arrival=scenario.arrival,
+            estimator=EstimatorConfig() if sensing is None else robot_estimator())
+        return plant_.simulate(TrackingSession(params, **session_options({}), law=law),
+                               scenario.x0, scenario.duration, world, scenario.disturbance)
+    result = simulate(with_arrival(law, trajectory, scenario.arrival), trajectory, scenario.x0,
+                      scenario.duration, scenario.dt, scenario.disturbance)
     return with_steer_angles(result, RobotGeometry(), SteerMode())

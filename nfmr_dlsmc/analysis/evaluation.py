@@ -6,7 +6,7 @@ comparison gains file), on the kinematic model (3) or the pybullet chassis in th
 process.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import time
 
 from nfmr_dlsmc.analysis.run_setup import pybullet_world
@@ -32,8 +32,10 @@ from nfmr_dlsmc.runtime.params import (
     load_params_file,
     PATH,
     path_values,
+    session_options,
 )
 from nfmr_dlsmc.runtime.share import shipped_config
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 
 #: Table 2, DLSMC row, and section 4.2 (Case 1, x0 = (1, 4, 0)).
 PAPER_CASE1 = {'iae': 13.5757, 'ise': 37.1057, 'std': 0.5938, 't_conv': 7.1}
@@ -66,7 +68,7 @@ class Evaluation:
     controller_name : str
         A name of :data:`~nfmr_dlsmc.baselines.registry.CONTROLLER_NAMES`.
     controller : object
-        That controller, built.
+        That tracking law, built (the arrival rule is added where it runs).
     params : ControllerParams
         The controller parameters (period, limits, geometry, steering mode).
     trajectory : object
@@ -150,7 +152,6 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
         blocks = load_gain_blocks(gains_file or shipped_config('comparison.yaml'))
         controller = build_controller(controller_name, blocks.get(controller_name),
                                       params.dlsmc.limits, params.dlsmc.dt)
-    controller = with_arrival(controller, trajectory, params.arrival)
     if x0 is None:  # a path from its start, else the chassis's initial_pose, else Case 1's
         x0 = getattr(trajectory, 'start_pose', None) or _file_start(params_file, plant)
     if duration is None:  # a path until its end and a little more, else the paper's 100 s
@@ -180,22 +181,24 @@ def _file_start(params_file, plant: str) -> tuple:
     return tuple(float(v) for v in robot_plant('pybullet').settings(flat).initial_pose)
 
 
-def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,
+def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
               duration: float, world=None, disturbance=None, progress=None):
     """
-    Run ``controller`` on ``plant`` in this process.
+    Run the tracking law ``law`` on ``plant`` in this process, stopping at a path's end.
 
     Parameters
     ----------
     plant : str
-        ``'kinematic'``: the model (3), forward Euler at the controller's period, the
-        result with the steer angles the wheel mapping would command; ``'pybullet'``: the
-        chassis of ``world``.
-    controller, params, trajectory, x0, duration
-        As in :class:`Evaluation`.
+        ``'kinematic'``: the model (3), forward Euler at the law's period, the result with
+        the steer angles the wheel mapping would command; ``'pybullet'``: the chassis of
+        ``world`` driven by the controller node's
+        :class:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession` (its odometry rules
+        the defaults), as a lockstep run over ROS drives it.
+    law, params, trajectory, x0, duration
+        As in :class:`Evaluation` (``law`` its ``controller``).
     world : object, optional
         The pybullet world configuration (pybullet only), its odometry included; the
-        pose the controller sees goes through ``params.estimator`` when it is enabled.
+        pose the law sees goes through ``params.estimator`` when it is enabled.
     disturbance : YawRateDisturbance, optional
         Added to the commanded yaw rate.
     progress : callable, optional
@@ -207,10 +210,12 @@ def plant_run(plant: str, controller, params: ControllerParams, trajectory, x0,
 
     """
     if plant == 'pybullet':
-        return robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
-                                                params.geometry, params.steering,
-                                                disturbance, progress, params.estimator)
-    run = simulate(controller, trajectory, x0, duration, params.dlsmc.dt, disturbance)
+        session = TrackingSession(replace(params, trajectory=trajectory),
+                                  **session_options({}), law=law)
+        return robot_plant('pybullet').simulate(session, x0, duration, world, disturbance,
+                                                progress)
+    run = simulate(with_arrival(law, trajectory, params.arrival), trajectory, x0, duration,
+                   params.dlsmc.dt, disturbance)
     return with_steer_angles(run, params.geometry, params.steering)
 
 

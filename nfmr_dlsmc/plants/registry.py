@@ -35,12 +35,12 @@ class RobotPlant:
         (missing ones default); raises :class:`~nfmr_dlsmc.core.validation.ParameterError`
         naming a bad parameter.
     simulate
-        ``simulate(controller, trajectory, x0, duration, world, geometry, steering,
-        disturbance, progress, estimator) -> SimResult``: the closed loop in one process,
-        the controller fed the world's odometry (through the pose estimator of
-        ``estimator``, an :class:`~nfmr_dlsmc.core.pose_estimator.EstimatorConfig`, when
-        enabled), the result shaped as :class:`~nfmr_dlsmc.plants.kinematic.SimResult`
-        with the ground truth as its state.
+        ``simulate(session, x0, duration, world, disturbance, progress) -> SimResult``: the
+        closed loop in one process of a
+        :class:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession` (the controller
+        node's step: odometry checks, estimator, arrival, steer hold, wheel mapping) fed the
+        world's odometry as a lockstep run over ROS feeds it, the result shaped as
+        :class:`~nfmr_dlsmc.plants.kinematic.SimResult` with the ground truth as its state.
     world_rtf
         ``world_rtf(sim_seconds) -> dict``: the world stepped open loop for
         ``sim_seconds`` [s], for ``nfmr-bench`` (keys ``sim_s``, ``wall_s``,

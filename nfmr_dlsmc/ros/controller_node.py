@@ -77,14 +77,18 @@ from nav_msgs.msg import Odometry, Path
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
 from nfmr_dlsmc.core.path_reference import PathError, stamped_points
-from nfmr_dlsmc.core.schema import from_flat
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaLifecycleNode
 from nfmr_dlsmc.ros.scene import reference_markers, reference_path
 from nfmr_dlsmc.runtime.clock_rate import ClockRateWatch
 from nfmr_dlsmc.runtime.loop_stats import LoopStats
-from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, NodeOptions
+from nfmr_dlsmc.runtime.odometry_wire import sigma_from_variances, stamp_seconds
+from nfmr_dlsmc.runtime.params import (
+    controller_parameters,
+    controller_params,
+    session_options,
+)
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import JumpThreshold
@@ -165,27 +169,6 @@ def path_answer(msg: Path, topic: str, problem: str | None, summary: str) -> Dia
     return status
 
 
-def _session_options(values: dict) -> dict:
-    """
-    Validate the node's own options among its parameter values.
-
-    Returns
-    -------
-    dict
-        The :class:`TrackingSession` options among them.
-
-    Raises
-    ------
-    ParameterError
-        For an invalid option of the node (:class:`NodeOptions`).
-
-    """
-    options = from_flat(NodeOptions, values)
-    return {'odom_timeout': options.odom_timeout, 'odom_frame': options.odom_frame,
-            'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold,
-            'max_start_distance': options.max_start_distance}
-
-
 def _new_session(values: dict) -> TrackingSession:
     """
     Return a tracking session of the parameter values ``values``.
@@ -196,7 +179,7 @@ def _new_session(values: dict) -> TrackingSession:
         For an invalid parameter.
 
     """
-    return TrackingSession(controller_params(values), **_session_options(values))
+    return TrackingSession(controller_params(values), **session_options(values))
 
 
 class ControllerNode(SchemaLifecycleNode):
@@ -425,7 +408,7 @@ class ControllerNode(SchemaLifecycleNode):
             candidate[p.name] = plain_value(p.value)
         try:
             params = controller_params(candidate)
-            options = _session_options(candidate)
+            options = session_options(candidate)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         for p in changes:
@@ -445,12 +428,11 @@ class ControllerNode(SchemaLifecycleNode):
 
     def _on_odom(self, msg: Odometry) -> None:
         p = msg.pose.pose
-        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        stamp = stamp_seconds(msg.header.stamp.sec, msg.header.stamp.nanosec)
         source = self._values['tick_source']
         wall = max(self._now(), stamp) if self._ages_on_sim_time() else time.monotonic()
         covariance = msg.pose.covariance
-        sigma = (math.sqrt(max(covariance[0], covariance[7], 0.0)),
-                 math.sqrt(max(covariance[35], 0.0)))
+        sigma = sigma_from_variances(covariance[0], covariance[7], covariance[35])
         with self._lock:
             if not self._active:
                 return

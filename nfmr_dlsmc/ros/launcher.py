@@ -47,6 +47,7 @@ from nfmr_dlsmc.runtime.params import (
     check_odometry_timing,
     controller_params,
     load_params_file,
+    lockstep_tick_source,
     ParamsFileError,
     path_file,
     path_values,
@@ -352,14 +353,10 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
               for arg in ('-p', f'{key}:={value}'))]
     if options.mode == 'realtime':
         return [*args, '-p', 'tick_source:=clock']
+    # Odometry ages on simulated time, so a slow step on a busy machine is no fault.
     odometry = world.disturbance
-    if odometry.odom_latency == 0.0 and odometry.odom_rate * world.physics_dt >= 1.0:
-        # Odometry of every step, on time: a tick per message, which is the step's own
-        # (a tick per /clock could come before the step's odometry has: runs would differ).
-        return [*args, '-p', 'tick_source:=odom']
-    # Slower or late odometry: a tick per simulated step all the same; odometry ages on
-    # simulated time, so a slow step on a busy machine is no fault.
-    return [*args, '-p', 'tick_source:=sim_clock']
+    source = lockstep_tick_source(odometry.odom_rate, odometry.odom_latency, world.physics_dt)
+    return [*args, '-p', f'tick_source:={source}']
 
 
 def _new_run_dir(out: Path, config: Path) -> Path:

@@ -24,7 +24,6 @@ from nfmr_dlsmc.analysis.run_metrics import (
 )
 from nfmr_dlsmc.analysis.run_plots import plot_runs
 from nfmr_dlsmc.bag.reader import read_bag
-from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.ros.bag_animation import animate_bag
@@ -84,9 +83,7 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
         print('the same scenario in this process: pybullet, then the kinematic model ...',
               file=sys.stderr, flush=True)
         for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
-            controller = with_arrival(DlsmcController(params.dlsmc), params.trajectory,
-                                      params.arrival)
-            sim = plant_run(plant, controller, params, params.trajectory,
+            sim = plant_run(plant, DlsmcController(params.dlsmc), params, params.trajectory,
                             settings.initial_pose, options.duration, settings.world)
             columns.append((label, simulation_metrics(sim, options.hold_from, goal, path_end)))
             plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],

@@ -273,6 +273,42 @@ def check_odometry_timing(odom_rate: float, odom_latency: float, flat: dict) -> 
             'robot would be stopped between messages'), 'Hz')
 
 
+def session_options(values: dict) -> dict:
+    """
+    Validate the controller node's own options among the flat parameter ``values``.
+
+    Missing ones take their defaults (:class:`NodeOptions`).
+
+    Returns
+    -------
+    dict
+        The :class:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession` options among them.
+
+    Raises
+    ------
+    ParameterError
+        For an invalid option.
+
+    """
+    options = from_flat(NodeOptions, values)
+    return {'odom_timeout': options.odom_timeout, 'odom_frame': options.odom_frame,
+            'max_jump': options.max_odom_jump, 'restart_threshold': options.restart_threshold,
+            'max_start_distance': options.max_start_distance}
+
+
+def lockstep_tick_source(odom_rate: float, odom_latency: float, physics_dt: float) -> str:
+    """
+    Return the controller's ``tick_source`` in lockstep with a sim of this odometry.
+
+    Odometry of every physics step [s], on time: ``odom``, a tick per message, which is
+    the step's own (a tick per ``/clock`` could come before the step's odometry has).
+    Slower [Hz] or late [s] odometry: ``sim_clock``, a tick per simulated step all the same.
+    """
+    if odom_latency == 0.0 and odom_rate * physics_dt >= 1.0:
+        return 'odom'
+    return 'sim_clock'
+
+
 def _trajectory_parameters() -> list[Param]:
     """Return ``trajectory.name`` and the parameters of each trajectory under its name."""
     found = [_TRAJECTORY_NAME]

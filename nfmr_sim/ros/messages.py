@@ -1,10 +1,10 @@
 """Conversions between the world's plain types and ROS messages (and nothing more)."""
 
 from dataclasses import dataclass
-import math
 
 from builtin_interfaces.msg import Time
 from nav_msgs.msg import Odometry
+from nfmr_dlsmc.runtime.odometry_wire import NS_PER_S, stamp_nanoseconds, yaw_quaternion
 from nfmr_sim.world import PlanarState
 import numpy as np
 
@@ -72,8 +72,8 @@ def odometry_covariance(position_noise: float, yaw_noise: float) -> OdometryCova
 
 def time_message(seconds: float) -> Time:
     """Convert simulated time [s] to builtin_interfaces/Time via integer nanoseconds."""
-    nanoseconds = int(round(seconds * 1e9))
-    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
+    sec, nanosec = divmod(stamp_nanoseconds(seconds), NS_PER_S)
+    return Time(sec=sec, nanosec=nanosec)
 
 
 def odometry_message(state: PlanarState, stamp: Time,
@@ -89,8 +89,7 @@ def odometry_message(state: PlanarState, stamp: Time,
     msg.child_frame_id = 'base_link'
     msg.pose.pose.position.x = state.x
     msg.pose.pose.position.y = state.y
-    msg.pose.pose.orientation.z = math.sin(0.5 * state.yaw)
-    msg.pose.pose.orientation.w = math.cos(0.5 * state.yaw)
+    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = yaw_quaternion(state.yaw)
     msg.pose.covariance = covariance.pose
     msg.twist.twist.linear.x = state.vx
     msg.twist.twist.linear.y = state.vy
