@@ -173,8 +173,10 @@ def test_a_worker_killed_mid_run_leaves_the_summary_complete_and_equal_to_a_loca
 
 
 def test_a_scheduler_killed_mid_run_is_one_line_and_exit_1_and_the_finished_runs_are_kept(
-        cluster):
-    command = Background([*_montecarlo(40), '--scheduler', cluster.address])
+        cluster, tmp_path):
+    journal = tmp_path / 'runs.jsonl'
+    command = Background([*_montecarlo(40), '--scheduler', cluster.address, '--journal',
+                          str(journal)])
     _wait_for(lambda: '[  2/40]' in command.stderr, 300, 'two starts done on the cluster')
     cluster.scheduler.kill()
     killed = time.monotonic()
@@ -186,14 +188,22 @@ def test_a_scheduler_killed_mid_run_is_one_line_and_exit_1_and_the_finished_runs
     found = re.fullmatch(
         f'nfmr-montecarlo: error: the Dask scheduler at {re.escape(cluster.address)} is gone '
         r'\(the connection to it was lost\): (\d+) of 40 runs had finished; the summary '
-        r'printed is of those \1 \(partial, "complete": false\)', line)
+        r'printed is of those \1 \(partial, "complete": false\); '
+        f'{re.escape(str(journal))} holds all ' r'\1: run again with it, only the other (\d+) '
+        'are run',
+        line)
     assert found, line
     finished = int(found[1])
+    assert int(found[2]) == 40 - finished
     # The summary is of the runs the progress line counted, and only of them.
     assert f'[{finished:>3}/40]' in stderr and f'[{finished + 1:>3}/40]' not in stderr
     summary = json.loads(stdout.strip().splitlines()[-1])
     assert (summary['complete'], summary['runs_finished'], summary['runs_asked'],
             summary['n'], len(summary['runs'])) == (False, finished, 40, finished, finished)
+    # The journal holds the same runs, for a rerun to take instead of making them again.
+    study, *runs = [json.loads(line) for line in journal.read_text().splitlines()]
+    assert study['study']['n'] == 40
+    assert sorted(run['x0'] for run in runs) == sorted(run['x0'] for run in summary['runs'])
 
 
 @pytest.mark.slow

@@ -26,7 +26,8 @@ from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, simulation_metrics
 from nfmr_dlsmc.plants.batch import simulate_batch_parallel
 from nfmr_dlsmc.plants.kinematic import simulate
 from nfmr_dlsmc.plants.registry import robot_plant
-from nfmr_dlsmc.runtime.params import ControllerParams
+from nfmr_dlsmc.runtime.params import ControllerParams, session_options
+from nfmr_dlsmc.runtime.tracking_session import TrackingSession
 from nfmr_dlsmc.runtime.worker_pool import finished, SchedulerLost, worker_pool
 import numpy as np
 
@@ -55,7 +56,7 @@ def uses_batch(plant: str, config: DlsmcConfig, trajectory=None) -> bool:
 
 def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
                duration: float, disturbance, hold_last: float, jobs: int,
-               progress) -> dict:
+               progress, known: dict | None = None) -> dict:
     """
     Run the DLSMC from every start.
 
@@ -78,8 +79,12 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     jobs : int or Cluster
         Processes, or a Dask cluster (one run per start only).
     progress : callable
-        ``progress(done, total, x0, figures)`` after each start run alone (not called by
+        ``progress(done, total, k, figures)`` after each start run alone: ``done`` of the
+        ``total`` runs to make have ended, the last that of ``starts[k]`` (not called by
         the batch simulator).
+    known : dict, optional
+        Start index -> its figures as returned here, for the starts already run (one run
+        per start only): not run again, their figures returned as given.
 
     Returns
     -------
@@ -91,8 +96,9 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     Raises
     ------
     SchedulerLost
-        The cluster's scheduler went away; its ``partial`` holds the runs that had ended:
-        (indices into ``starts``, their figures as returned here), or None if none had.
+        The cluster's scheduler went away; its ``partial`` holds the runs that had ended,
+        ``known`` ones included: (indices into ``starts``, their figures as returned here),
+        or None if none had.
 
     """
     if uses_batch(plant, params.dlsmc, params.trajectory):
@@ -100,17 +106,19 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
                                          disturbance, jobs=jobs)
         return {'t_conv': result.t_conv, 'iae': result.iae,
                 'final_distance': result.final_distance}
-    tasks = [(tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
-              hold_last, world, params.geometry, params.steering, params.estimator,
-              params.arrival) for x0 in starts.tolist()]
-    rows = [None] * len(tasks)
+    rows = [(known or {}).get(k) for k in range(len(starts))]
+    tasks = {k: (tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
+                 hold_last, world, params.geometry, params.steering, params.estimator,
+                 params.arrival) for k, x0 in enumerate(starts.tolist()) if rows[k] is None}
+    if not tasks:
+        return _columns(rows)
     with worker_pool(jobs, quiet=True) as pool:
-        futures = {pool.submit(_run_start, task): k for k, task in enumerate(tasks)}
+        futures = {pool.submit(_run_start, task): k for k, task in tasks.items()}
         try:
             for done, future in enumerate(finished(futures, jobs), 1):
                 k = futures[future]
                 rows[k] = future.result()
-                progress(done, len(tasks), tasks[k][0], rows[k])
+                progress(done, len(tasks), k, rows[k])
         except SchedulerLost as lost:
             kept = [k for k, row in enumerate(rows) if row is not None]
             if kept:
@@ -136,20 +144,24 @@ def _run_start(task: tuple) -> dict:
     x0, plant, config, trajectory, duration, disturbance, hold_last, world, geometry, \
         steering, estimator, arrival = task
     goal = getattr(trajectory, 'end_pose', None)
-    controller = with_arrival(DlsmcController(config), trajectory, arrival)
     if plant == 'pybullet':
-        result = robot_plant('pybullet').simulate(controller, trajectory, x0, duration, world,
-                                                  geometry, steering, disturbance, None,
-                                                  estimator)
+        params = ControllerParams(dlsmc=config, trajectory=trajectory, steering=steering,
+                                  geometry=geometry, estimator=estimator, arrival=arrival)
+        result = robot_plant('pybullet').simulate(
+            TrackingSession(params, **session_options({})), x0, duration, world, disturbance)
     else:
-        result = simulate(controller, trajectory, x0, duration, config.dt, disturbance)
+        result = simulate(with_arrival(DlsmcController(config), trajectory, arrival),
+                          trajectory, x0, duration, config.dt, disturbance)
     figures = simulation_metrics(result, max(duration - hold_last, 0.0), goal).as_dict()
-    if goal is None:
-        keys = RUN_KEYS
-    else:
-        keys = PATH_RUN_KEYS
+    if goal is not None:
         figures['outcome'] = _OUTCOME_CODES.get(figures['arrival'], 0.0)
-    return {key: math.nan if figures[key] is None else float(figures[key]) for key in keys}
+    return {key: math.nan if figures[key] is None else float(figures[key])
+            for key in run_keys(trajectory)}
+
+
+def run_keys(trajectory) -> tuple:
+    """Return the figures of each start run alone (along a path those of PATH_RUN_KEYS)."""
+    return RUN_KEYS if getattr(trajectory, 'end_pose', None) is None else PATH_RUN_KEYS
 
 
 def time_key(plant: str) -> str:
