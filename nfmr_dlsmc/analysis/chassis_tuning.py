@@ -77,8 +77,7 @@ _IDENTITY_KEY = 'nfmr_tune'
 _FIGURES_KEY, _SATURATED_KEY, _PRUNED_KEY, _UNTUNED_KEY = (
     'figures', 'omega_saturated', 'pruned', 'untuned')
 #: How much farther than it started a run may stray before its hold window [m]: a start
-#: ahead of the reference turns round and chases it (the robot profile on the small robot,
-#: circle from (0.27, -0.46, -0.46): 1.5 m off at 2.7 s, back within 1 cm at 9.7 s).
+#: ahead of the reference turns round and chases it (how far: doc/design.md, D19).
 RUNAWAY_MARGIN = 3.0
 #: A running trial that has not written a heartbeat for twice this is failed by the next
 #: process working on the study (a crashed or killed process) [s].

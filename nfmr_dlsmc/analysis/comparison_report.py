@@ -3,7 +3,10 @@
 
 Also the convergence times of section 4.2, the figures of holding the path, the paper's
 qualitative findings checked, on pybullet which laws hold up on the chassis, and the
-figures.
+figures. The report states what it computes: every figure with a unit in it is formatted
+from the results it is given or from the constants the runs used (limits, tolerances, the
+scenarios, the chassis). Why the laws behave as they do is measured prose, dated, in
+doc/comparison.md.
 """
 
 from dataclasses import dataclass
@@ -16,11 +19,12 @@ from nfmr_dlsmc.analysis.comparison_metrics import (
     PAPER_TABLE3,
     PAPER_TABLE4,
     PULSE_RECOVERY,
+    SURFACE_TOLERANCE,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2
 from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES
-from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits
-from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, format_metric
+from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, CONVERGENCE_TOLERANCE, format_metric
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.steering_presets import with_steering
 from nfmr_dlsmc.plants.registry import robot_plant
@@ -30,9 +34,11 @@ TABLE2_COLUMNS = ('pid', 'csmc', 'dl_crsmc', 'dntsmc', 'btsmc_ntsmc', 'dlsmc')
 INNER_COLUMNS = ('btintsmc_crsmc', 'btintsmc_ntsmc', 'dlsmc')
 #: Columns of Tables 3 and 4: the paper's attitude loops, then the DLSMC's robot profile.
 ATTITUDE_COLUMNS = INNER_COLUMNS + ('dlsmc_robot',)
-#: omega_raw total variation [rad/s^2] above which a law counts as chattering: a smooth
-#: yaw rate on the sine needs about 0.1 rad/s^2.
+#: omega_raw total variation [rad/s^2] above which a law counts as chattering: the sine's
+#: own yaw rate, d/dt atan(0.5 cos(t / 4)), varies by about 0.02 rad/s^2.
 CHATTER_TV = 10.0
+#: The control period of every comparison run [s].
+PERIOD = CASE1_LONGITUDINAL.dt
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,33 @@ def _pct(ours, paper) -> str:
     if ours is None or paper in (None, 0):
         return ''
     return f' ({100.0 * (ours - paper) / paper:+.1f}%)'
+
+
+def _cm(length: float) -> str:
+    """Return a length [m] in centimetres, e.g. ``1 cm``."""
+    return f'{100.0 * length:g} cm'
+
+
+def _mm(length: float) -> str:
+    """Return a length [m] in millimetres, e.g. ``1 mm``."""
+    return f'{1e3 * length:g} mm'
+
+
+def _ms(period: float) -> str:
+    """Return a time [s] in milliseconds, e.g. ``1 ms``."""
+    return f'{1e3 * period:g} ms'
+
+
+def _pulses(since: float = float('-inf')) -> str:
+    """Return the start times of Case 2's pulses from ``since`` [s] on, e.g. ``5 s and 50 s``."""
+    return ' and '.join(f'{p.start:g} s' for p in CASE2.disturbance.pulses if p.start >= since)
+
+
+def _limits() -> str:
+    """Return the input limits every controller is saturated at."""
+    limits = InputLimits()
+    return (f'v in [{limits.v_min:g}, {limits.v_max:g}] m/s, abs(omega) <= '
+            f'{limits.omega_max:g} rad/s')
 
 
 def _runs_of(document: dict, scenario) -> dict:
@@ -104,9 +137,9 @@ def _convergence_table(runs: dict, columns, plant: str = 'kinematic') -> list[st
     source = 'paper' if plant == 'kinematic' else 'paper, kinematic'
     present = [c for c in columns if c in runs]
     lines = _table_head('convergence time [s]', [controller_label(c) for c in present])
-    rows = (('t_conv', 'position (distance <= 1 mm)'),
+    rows = (('t_conv', f'position (distance <= {_mm(CONVERGENCE_TOLERANCE)})'),
             ('theta_r_t_conv', f'theta_r (abs(theta - theta_r) <= {HEADING_TOLERANCE} rad)'),
-            ('s_y_t_conv', 's_y (abs(s_y) <= 1 mm)'))
+            ('s_y_t_conv', f's_y (abs(s_y) <= {_mm(SURFACE_TOLERANCE)})'))
     for key, label in rows:
         cells = []
         for c in present:
@@ -143,7 +176,7 @@ def _share(value) -> str:
 
 #: The hold table: (results key, column header, cell format).
 HOLD_COLUMNS = (
-    ('t_conv_1cm', 't_conv 1 cm [s]', _time),
+    ('t_conv_1cm', f't_conv {_cm(COARSE_TOLERANCE)} [s]', _time),
     ('hold_distance_p99', 'distance p99 [m]', format_metric),
     ('hold_theta_e_p99', 'abs(theta_e) p99 [rad]', format_metric),
     ('hold_omega_tv', 'omega TV [rad/s²]', format_metric),
@@ -167,17 +200,19 @@ def _hold_section(document: dict) -> list[str]:
     """Return the hold tables of the three runs, with what each column measures."""
     runs = [('Case 1, x0 = (1, 4, 0)', _runs_of(document, CASE1_LONGITUDINAL)),
             ('Case 1, x0 = (4, 1, 0)', _runs_of(document, CASE1_LATERAL)),
-            ('Case 2, x0 = (1, 1, pi/6), pulses at 5 s and 50 s', _runs_of(document, CASE2))]
+            (f'Case 2, x0 = (1, 1, pi/6), pulses at {_pulses()}', _runs_of(document, CASE2))]
     first = next((r for _, case in runs for r in case.values()), {})
     hold_from = first.get('hold_from')
     kinematic = document.get('plant', 'kinematic') == 'kinematic'
+    coarse = _cm(COARSE_TOLERANCE)
     lines = [
         f'## Holding the path (from t = {_num(hold_from, 0)} s on)',
         '',
-        't_conv 1 cm: the last time the distance exceeds 1 cm (never: still beyond it at '
-        'the end). The rest over the hold window: 99th percentiles of the distance and of '
-        'abs(theta_e) (— for laws without theta_d); total variation of the applied omega '
-        'per second; the share of ticks with omega clipped at +-1.59 rad/s; the largest '
+        f't_conv {coarse}: the last time the distance exceeds {coarse} (never: still beyond '
+        'it at the end). The rest over the hold window: 99th percentiles of the distance and '
+        'of abs(theta_e) (— for laws without theta_d); total variation of the applied omega '
+        'per second; the share of ticks with omega clipped at '
+        f'+-{InputLimits().omega_max:g} rad/s; the largest '
         'rate of the commanded steer angles (double Ackermann mapping of (v, omega)'
         + (', computed from the inputs: the kinematic model has no wheels' if kinematic else
            '') + ') and ' + ('the measured steer joint rates (— : no joints in this model).'
@@ -188,20 +223,21 @@ def _hold_section(document: dict) -> list[str]:
     ]
     for title, case in runs:
         lines += [f'### {title}', '', *_hold_table(case), '']
-    lines += ['In Case 2 the 50 s pulse steps omega by 0.5 rad/s within one tick, so every '
-              "law's steer command jumps then: its steer columns show the pulse, not chatter.",
-              '']
+    held = [p for p in CASE2.disturbance.pulses if hold_from is not None and p.start >= hold_from]
+    for pulse in held:
+        lines += [f'In Case 2 the {pulse.start:g} s pulse steps omega by {pulse.magnitude:g} '
+                  "rad/s within one tick, so every law's steer command jumps then: its steer "
+                  'columns show the pulse, not chatter.', '']
     return lines
 
 
-def _band_explanation(bands: dict, eps: float, plant: str) -> str:
+def _band_holders(bands: dict, eps: float) -> str:
+    """Return the sentence naming the loops the paper has settle wider that hold the band."""
     holding = [n for n in INNER_COLUMNS[:2] if bands[n] is not None and bands[n] <= eps]
-    if not holding or plant != 'kinematic':
+    if not holding:
         return ''
-    return (f" {' and '.join(controller_label(n) for n in holding)} holds the band too: with its "
-            'tuned rate above the 0.5 rad/s pulse and a 1 kHz loop on the kinematic model, '
-            'nothing in the plant lets theta_e drift further (the paper reports about '
-            '+-0.18 rad for the other loops).')
+    verb = 'holds' if len(holding) == 1 else 'hold'
+    return f" {' and '.join(controller_label(n) for n in holding)} {verb} the band too."
 
 
 def paper_findings(document: dict) -> list[Finding]:
@@ -237,18 +273,12 @@ def paper_findings(document: dict) -> list[Finding]:
                   f" (DLSMC: max {_num(dl['max_abs_omega_raw'], 2)} rad/s, "
                   f"{100.0 * dl['omega_raw_over_limit']:.2f}% of steps, "
                   f"TV {_num(dl['omega_raw_tv'], 2)})")
-        why = ''
-        if not (breaks and chatters):
-            why = (' The search chose small switching gains P1, P2 (gains file), which leave '
-                   'the law nearly continuous'
-                   + ('; its omega still leaves the limit during the return.' if breaks else
-                      ', and a slow return keeps omega inside the limit.'))
         findings.append(Finding(
             "CSMC's omega chatters and breaks its limit without saturation.", breaks and chatters,
             f"CSMC before saturation: max abs omega {_num(r['max_abs_omega_raw'], 2)} rad/s, "
-            f"{100.0 * r['omega_raw_over_limit']:.2f}% of steps beyond 1.59 rad/s, total "
-            f"variation over the second half {_num(r['omega_raw_tv'], 2)} rad/s² (chattering "
-            f'above {CHATTER_TV:g}){versus}.{why}'))
+            f"{100.0 * r['omega_raw_over_limit']:.2f}% of steps beyond {omega_max:g} rad/s, "
+            f"total variation over the second half {_num(r['omega_raw_tv'], 2)} rad/s² "
+            f'(chattering above {CHATTER_TV:g}){versus}.'))
     if all(n in case2 for n in INNER_COLUMNS):
         eps = InnerLoopGains().eps
         bands = {n: case2[n]['theta_e_band'] for n in INNER_COLUMNS}
@@ -260,9 +290,14 @@ def paper_findings(document: dict) -> list[Finding]:
             'max abs theta_e over [{:g}, {:g}) s without {:g} s after each pulse start: '.format(
                 *BAND_WINDOW, PULSE_RECOVERY)
             + ', '.join(f'{controller_label(n)} {_num(bands[n], 5)} rad' for n in INNER_COLUMNS)
-            + f' (epsilon = {eps:g} rad).'
-            + _band_explanation(bands, eps, document.get('plant', 'kinematic'))))
+            + f' (epsilon = {eps:g} rad).' + _band_holders(bands, eps)))
     return findings
+
+
+def _is_smooth(figures: dict) -> bool:
+    """Return whether a run's omega_raw stays inside its limit and below CHATTER_TV."""
+    return (figures['omega_raw_over_limit'] == 0.0 and figures['omega_raw_tv'] is not None
+            and figures['omega_raw_tv'] <= CHATTER_TV)
 
 
 def _difference_notes(document: dict) -> list[str]:
@@ -279,72 +314,61 @@ def _difference_notes(document: dict) -> list[str]:
         'literature uses them). A tuned DLSMC is `config/tuned_outer.yaml` (`nfmr-tune`).',
     ]
     if document.get('plant', 'kinematic') != 'kinematic':
+        world = _world(document)
         notes.append(
             "- **Plant.** The paper's values are kinematic-model values: the robot turns at "
             'exactly the commanded omega. Here omega goes through the double Ackermann '
-            'mapping to four rate-limited steer joints and a 1000 kg chassis on tyres, and '
-            'every controller keeps the gains chosen on the kinematic model. The differences '
-            "to the paper are mostly the plant's; see the section on which laws hold up.")
+            'mapping to four steer joints capped at '
+            f'{world.motors.steer_rate_limit:g} rad/s and a '
+            f'{world.chassis.total_mass:g} kg chassis on tyres, and every controller keeps '
+            'the gains chosen on the kinematic model; the section on which laws hold up '
+            'sorts them by what they do on the chassis.')
         return notes
     dl1 = case1.get('dlsmc')
-    if dl1 is not None:
+    if dl1 is not None and not _is_smooth(dl1):
+        smooth = [controller_label(n) for n in CONTROLLER_NAMES
+                  if n in case1 and _is_smooth(case1[n])]
         notes.append(
-            '- **Chattering of the cascades.** Once converged, the discrete terminal terms keep '
-            'the position error at the micrometre level and theta_d = atan2(u_y, u_x) swings '
-            'with it; the backward difference thetadot_d (doc/design.md, D5) turns that into '
-            f"a commanded omega beyond the limit on {100.0 * dl1['omega_raw_over_limit']:.1f}% "
-            f"of the DLSMC's steps (total variation {_num(dl1['omega_raw_tv'], 0)} rad/s² over "
-            'the second half). The laws with a boundary layer or no thetadot_d stay smooth. '
-            "The DLSMC's `thetadot_filter` option reduces it.")
-        if dl1.get('s_y_t_conv') is None and dl1.get('final_abs_s_y') is not None:
-            notes.append(
-                '- **s_y convergence.** Near s = 0, erf(h s) is about 1.13 h s, so the BTINTSMC '
-                'reaching term k2 abs(s)^(q3/p3) erf(h s) grows like abs(s)^1.52: s_y decays '
-                'algebraically, not in finite time, and at the end of the run abs(s_y) is '
-                'still '
-                f"{1000.0 * dl1['final_abs_s_y']:.1f} mm (the paper's 6.2 s uses a threshold "
-                'it does not state).')
+            '- **Chattering of the cascades.** The DLSMC commands an omega beyond its limit '
+            f"on {100.0 * dl1['omega_raw_over_limit']:.1f}% of its steps (total variation "
+            f"{_num(dl1['omega_raw_tv'], 0)} rad/s² over the second half). Inside the limit "
+            f'with a total variation of at most {CHATTER_TV:g} rad/s² there: '
+            f"{', '.join(smooth) or 'none'}. Why the cascades chatter: doc/limits.md.")
+    if (dl1 is not None and dl1.get('s_y_t_conv') is None
+            and dl1.get('final_abs_s_y') is not None):
+        outer = OuterLoopGains()
+        paper = PAPER_TABLE2['dlsmc']['s_y_t_conv']
+        notes.append(
+            f'- **s_y convergence.** abs(s_y) is still beyond {_mm(SURFACE_TOLERANCE)} at the '
+            f"end of the run, {1e3 * dl1['final_abs_s_y']:.1f} mm (the paper's {paper:g} s uses "
+            'a threshold it does not state). Near s = 0, erf(h s) is '
+            'about (2 / sqrt(pi)) h s, so the BTINTSMC reaching term k2 abs(s)^(q3/p3) '
+            f"erf(h s) grows like abs(s)^{1.0 + outer.q3 / outer.p3:.2f} (the paper's q3/p3 "
+            f'= {outer.q3}/{outer.p3}): s_y decays algebraically, not in finite time.')
     dl2 = case2.get('dlsmc')
-    if dl2 is not None and dl2.get('theta_e_iae') is not None:
+    if dl2 is not None and dl2.get('theta_e_iae') and dl2.get('theta_e_settled_iae') is not None:
+        whole = dl2['theta_e_iae']
+        before = whole - dl2['theta_e_settled_iae']
+        paper = PAPER_TABLE3['dlsmc']['iae']
         notes.append(
-            '- **Tables 3 and 4 over the whole run.** From (1, 1, pi/6) the first theta_d '
-            'points about 2.4 rad away from the heading and the robot turns at the omega limit '
-            f"for several seconds: that transient is most of our IAE {dl2['theta_e_iae']:.2f} "
-            "rad·s. The paper's 0.0403 rad·s cannot include it, so the paper's integration "
-            f'window is not the whole run; the rows from t = {BAND_WINDOW[0]:g} s compare the '
-            'attitude loops once the return is over.')
+            "- **Tables 3 and 4 over the whole run.** Of the DLSMC's theta_e IAE "
+            f'{whole:.2f} rad·s, {before:.2f} rad·s ({100.0 * before / whole:.0f}%) accrue '
+            f'before t = {BAND_WINDOW[0]:g} s, during the return from (1, 1, pi/6); the '
+            f"paper's {paper:g} rad·s is {'less' if paper < before else 'not less'} than that "
+            f'part alone. The rows from t = {BAND_WINDOW[0]:g} s compare the attitude loops '
+            'once the return is over.')
     return notes
 
 
-#: Groups of "which laws hold up on the robot", in the order tested: (key, title, why).
-#: A controller falls in the first group whose test it meets (:func:`_robot_group`).
+#: Groups of "which laws hold up on the robot", in the order tested: (key, title). A
+#: controller falls in the first group whose test it meets (:func:`_robot_group`); why the
+#: laws of each group behave so is in doc/comparison.md.
 ROBOT_GROUPS = (
-    ('chatter', 'Chatter: omega at its limits',
-     'A discontinuous switching term (a sign, or a terminal power with an infinite slope '
-     'at zero error) and, in the cascades, thetadot_d as a backward difference of a theta_d '
-     'that swings with millimetre errors. On the kinematic model omega turns the heading '
-     'within the same millisecond, so the switching stays a small chatter on the path. On '
-     'the chassis omega becomes steer angles that joints reach at a capped rate while '
-     'moving a 1000 kg body: the heading answers tens of milliseconds late, the switching '
-     'overshoots, and the loop locks into a limit cycle from one omega limit to the other. '
-     'The steer command then flips by up to pi within a tick, the joints run at their cap '
-     'and the robot weaves about the path.'),
-    ('off', 'Off the path at the end of a run',
-     'The final distance exceeds 1 cm in at least one run; the kinematic report '
-     '(`nfmr-compare` without `--plant`) shows whether the chassis is the cause.'),
-    ('joints', 'On the path, but the steer joints run at their cap',
-     'omega stays inside its limit, but it changes faster than the joints can steer (see '
-     'the omega TV column): the joints saturate and the heading lags. This costs accuracy '
-     'but causes no limit cycle.'),
-    ('late', 'On the path at the end, but not through the hold window',
-     'The distance p99 over the hold window exceeds 1 cm in some run: the law settles after '
-     'the window starts, or a Case 2 pulse pushes it off for longer.'),
-    ('holds', 'Holds the path with the steering still',
-     'Every term is continuous in the error near the path, so omega changes no faster than '
-     "the path's curvature asks and the steer joints turn at a small fraction of their cap. "
-     "The DLSMC's robot profile is the paper's law made so: an analytic thetadot_d, a linear "
-     'alpha near zero error, a boundary layer on the eta_hat switching term and a cap on '
-     'eta_hat.'),
+    ('chatter', 'Chatter: omega at its limits'),
+    ('off', 'Off the path at the end of a run'),
+    ('joints', 'On the path, but the steer joints run at their cap'),
+    ('late', 'On the path at the end, but not through the hold window'),
+    ('holds', 'Holds the path with the steering still'),
 )
 #: Share of the hold window with omega at its limit above which a law chatters [-], and
 #: share of the steer joints' rate cap at which they count as running at it [-].
@@ -395,7 +419,7 @@ def _evidence(name: str, figures: list[dict]) -> str:
 
 def _robot_section(document: dict) -> list[str]:
     """
-    Return the section "Which laws hold up on the robot and why".
+    Return the section "Which laws hold up on the robot".
 
     Every controller of a pybullet run in its :data:`ROBOT_GROUPS` group, with the figures
     that put it there.
@@ -405,41 +429,42 @@ def _robot_section(document: dict) -> list[str]:
     figures = {n: [r[n] for r in runs] for n in CONTROLLER_NAMES if all(n in r for r in runs)}
     groups = {n: _robot_group(f, steer_cap) for n, f in figures.items()}
     lines = [
-        '## Which laws hold up on the robot and why',
+        '## Which laws hold up on the robot',
         '',
         "Each controller is in the first group whose test it meets, over the three runs' "
         f'hold windows: omega at its limit on more than {100 * CHATTER_SHARE:g}% of the ticks '
-        f'(chatter); a final distance above {100 * COARSE_TOLERANCE:g} cm (off the path); '
+        f'(chatter); a final distance above {_cm(COARSE_TOLERANCE)} (off the path); '
         f'steer joints at {100 * JOINT_CAP_SHARE:g}% of their {steer_cap:g} rad/s cap or more '
-        f'in Case 1 (joints); a distance p99 above {100 * COARSE_TOLERANCE:g} cm (late); '
+        f'in Case 1 (joints); a distance p99 above {_cm(COARSE_TOLERANCE)} (late); '
         'otherwise it holds. Each line: the worst over the three runs (steer rates: over '
-        'the two Case 1 runs).',
+        "the two Case 1 runs). Why the laws of each group behave so, as measured: nfmr's "
+        'doc/comparison.md.',
         '',
     ]
-    for key, title, why in ROBOT_GROUPS:
+    for key, title in ROBOT_GROUPS:
         members = [n for n in figures if groups[n] == key]
         if members:
-            lines += [f'### {title}', '', *(_evidence(n, figures[n]) for n in members), '',
-                      f'Why: {why}', '']
+            lines += [f'### {title}', '', *(_evidence(n, figures[n]) for n in members), '']
     return lines
 
 
 def _introduction(plant: str, gains_path: Path, seconds: float, runs: int, where: str,
-                  duration: float, steer_cap: float) -> str:
+                  duration: float, world) -> str:
+    """Return the report's first paragraph; ``world`` is the chassis's (None: kinematic)."""
     setting = (
         'reproduced with the kinematic model (3): paper sine x_d = 0.5 t, y_d = sin(0.5 x_d), '
-        f'{duration:g} s at dt = 1 ms, forward Euler' if plant == 'kinematic' else
+        f'{duration:g} s at dt = {_ms(PERIOD)}, forward Euler' if world is None else
         "run on the simulated 4WIS chassis instead of the paper's kinematic model: pybullet, "
-        'in-process (`nfmr_sim.plant`), the Table 1 chassis (1000 kg, 20 Nm '
-        'motors, steer joints capped at '
-        f'{steer_cap:g} rad/s), double Ackermann wheel mapping, '
-        'controller and physics in lockstep at 1 ms; the controller sees the odometry of P, '
-        "the numbers and figures use its ground truth; Case 2's yaw-rate pulses are added to "
-        'the commanded omega before the wheel mapping. Paper sine x_d = 0.5 t, y_d = '
-        f'sin(0.5 x_d), {duration:g} s. The C1:C2 runs of Fig. 13 (a kinematic-model figure) '
-        'are left out')
+        'in-process (`nfmr_sim.plant`), the Table 1 chassis '
+        f'({world.chassis.total_mass:g} kg, {world.motors.rated_torque:g} Nm motors, steer '
+        f'joints capped at {world.motors.steer_rate_limit:g} rad/s), double Ackermann wheel '
+        f'mapping, controller and physics in lockstep at {_ms(PERIOD)}; the controller sees '
+        "the odometry of P, the numbers and figures use its ground truth; Case 2's yaw-rate "
+        'pulses are added to the commanded omega before the wheel mapping. Paper sine '
+        f'x_d = 0.5 t, y_d = sin(0.5 x_d), {duration:g} s. The C1:C2 runs of Fig. 13 (a '
+        'kinematic-model figure) are left out')
     return ('Zhang et al., *Entropy* 2023, 25(1), 27, section 4.2, ' + setting + '. Inputs '
-            'saturated at v in [0.2, 2] m/s, abs(omega) <= 1.59 rad/s for every controller. '
+            f'saturated at {_limits()} for every controller. '
             f"Gains: `{gains_path}` (DLSMC: the paper's gains; DLSMC, robot profile: the "
             "paper's gains with the six robot options of `config/robot_case1.yaml`; the "
             'others tuned on the kinematic model with the same budget, recorded in that '
@@ -481,7 +506,7 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         + _conditions(document),
         '',
         _introduction(plant, gains_path, seconds, runs, where, duration,
-                      _steer_rate_limit(document)),
+                      None if plant == 'kinematic' else _world(document)),
         '',
         *_sensing_note(document.get('sensing', 'ideal')),
         '## Table 2 — Case 1, x0 = (1, 4, 0): distance error',
@@ -511,7 +536,7 @@ def write_report(path: Path, document: dict, figures: dict, gains_path: Path,
         *_criteria_table(case2, ATTITUDE_COLUMNS, PAPER_TABLE3, 'theta_e_', plant),
         '',
         f'The same criteria from t = {BAND_WINDOW[0]:g} s on (the return is over; the '
-        '50 s pulse included):',
+        f'{_pulses(BAND_WINDOW[0])} pulse included):',
         '',
         *_criteria_table(case2, ATTITUDE_COLUMNS, {}, 'theta_e_settled_'),
         '',
@@ -570,9 +595,10 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
     plant = document.get('plant', 'kinematic')
     ((start, runs),) = document['path'].items()
     hold_from = next(iter(runs.values()))['hold_from']
-    chassis = ('the kinematic model (3), forward Euler at 1 ms' if plant == 'kinematic' else
-               'the simulated 4WIS chassis (pybullet, in-process, lockstep at 1 ms); every '
-               'figure is of its ground truth')
+    chassis = (f'the kinematic model (3), forward Euler at {_ms(PERIOD)}'
+               if plant == 'kinematic' else
+               f'the simulated 4WIS chassis (pybullet, in-process, lockstep at {_ms(PERIOD)}); '
+               'every figure is of its ground truth')
     lines = [
         f'# nfmr comparison along a path — {path_file.name}'
         + ('' if plant == 'kinematic' else f', {plant} chassis')
@@ -582,8 +608,8 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
         f'timed by the speed profile of the parameter file ({reference_duration:.1f} s), '
         f'for {duration:g} s on {chassis}. Every law stops by the same arrival rule '
         '(`arrival.*`): zero speed once within the goal tolerances, or when it passed the '
-        'goal or ran out of `goal_timeout`. Inputs saturated at v in [0.2, 2] m/s (below '
-        'v_min only on the final approach), abs(omega) <= 1.59 rad/s. Gains: '
+        f'goal or ran out of `goal_timeout`. Inputs saturated at {_limits()} (v below '
+        'v_min only on the final approach). Gains: '
         f'`{gains_path}`. {len(runs)} runs on {where} in {seconds:.1f} s '
         '(`nfmr-compare --path`).',
         '',
@@ -610,7 +636,12 @@ def _conditions(document: dict) -> str:
                    if document.get(key, 'ideal') != 'ideal')
 
 
+def _world(document: dict):
+    """Return the world of a chassis run: the default chassis's, with its steering preset."""
+    flat = with_steering({}, document.get('steering', 'ideal'))
+    return robot_plant('pybullet').settings(flat).world
+
+
 def _steer_rate_limit(document: dict) -> float:
     """Return the steer joints' rate limit [rad/s]: the default chassis's, or its preset's."""
-    flat = with_steering({}, document.get('steering', 'ideal'))
-    return robot_plant('pybullet').settings(flat).world.motors.steer_rate_limit
+    return _world(document).motors.steer_rate_limit

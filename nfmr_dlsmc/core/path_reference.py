@@ -35,30 +35,17 @@ built in four steps:
    than :data:`MIN_STAMP_STEP`.
 
 The curvature rate. A robot that steers its wheels turns them as the curvature of its path
-changes, at dkappa/dt = v dkappa/ds. Where a corner's arc meets a straight, kappa rises
-from 0 to 1 / radius within a few Gaussian widths (:data:`SMOOTHING` of the radius), which
-at cruise speed would ask the steering for tens of rad/s: more than the joints and the
-law's bandwidth follow, and the robot falls behind in every corner. The speed profile
-therefore also keeps v |dkappa/ds| <= :attr:`PathProfile.curvature_rate`: it slows the
-reference only where the curvature changes, and leaves the geometry (the rounding, the arc
-length, how far each point is cut) as it is. A longer, clothoid-like transition would not:
-for the same least radius it shifts the arc away from the corner (by about l^2 / (24 radius)
-for a transition of length l) and cuts the corner by more than the rounding promises.
-
-To choose it, with double Ackermann steering (front and rear wheels turned opposite, P at
-the chassis centre, wheelbase L, track T) a wheel at (+-L/2, +-T/2) points at
-atan((L/2) kappa / (1 -+ (T/2) kappa)); it turns at dkappa/dt times (L/2) at kappa = 0, and
-at most ((L/2)^2 + (T/2)^2) / (L/2) times (an inner wheel, at kappa = (T/2) / ((L/2)^2 +
-(T/2)^2)). Divide the steer rate the joints should keep to by that length. For the robot of
-``config/robot_case1.yaml`` (L = 0.89 m, T = 0.53 m: 0.60 m) the default 2.5 1/(m s) asks
-at most 1.5 rad/s of its joints (limited to 20 rad/s); on the simulated chassis, along the
-warehouse loop at 0.8 m/s with corners of 0.7 m, they turned at 2.3 rad/s at most in the
-corners, the law's corrections included.
-
-The same geometry bounds the corner radius such a chassis can follow: its inner wheels point
-at atan((L/2) / (radius - T/2)), 85 deg for that robot at the default radius of 0.3 m, where
-any correction of the law turns them past 90 deg and flips them (14 to 25 mm of error on
-the simulated chassis, whatever the curvature rate). Give it 0.7 m or more there (46 deg).
+changes, at dkappa/dt = v dkappa/ds, and where a corner's arc meets a straight kappa rises
+from 0 to 1 / radius within a few Gaussian widths. The speed profile therefore also keeps
+v |dkappa/ds| <= :attr:`PathProfile.curvature_rate`: it slows the reference only where the
+curvature changes and leaves the geometry (the rounding, the arc length, how far each
+point is cut) as it is, which a longer, clothoid-like transition would not (for the same
+least radius it shifts the arc away from the corner, by about l^2 / (24 radius) for a
+transition of length l). With double Ackermann steering (P at the chassis centre,
+wheelbase L, track T) the steer joints then turn at most ((L/2)^2 + (T/2)^2) / (L/2) times
+``curvature_rate`` [rad/s], and in a corner of radius r the inner wheels point at
+atan((L/2) / (r - T/2)). How to choose both for a chassis, and what they gave on the
+simulated one: doc/commands.md (``--path``).
 
 Before the start (t < 0, or before the first stamp) the reference moves along the start
 tangent at the start speed (at rest with the default ``start_speed = 0``: the first point);

@@ -210,8 +210,8 @@ def wheel_commands_for_twist(vx: float, vy: float, omega: float, geometry: Robot
         Steer angles [rad] kept by wheels that do not move (default 0).
 
     """
-    # Once per control tick, for four wheels: Python floats (a dozen numpy calls on arrays of
-    # four took 20 us a mapping, this 5 us), but for each wheel's |velocity| and direction:
+    # Once per control tick, for four wheels: Python floats (cheaper than a dozen numpy calls
+    # on arrays of four; doc/performance.md), but for each wheel's |velocity| and direction:
     # numpy's hypot and arctan2, those of steer_angle_series (math's differ from them in the
     # last bit where numpy runs SIMD versions, and every run's figures would move with them).
     # The wheels at (+-a, +-b), FL FR RL RR, as in RobotGeometry.wheel_positions.

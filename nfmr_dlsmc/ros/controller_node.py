@@ -59,9 +59,8 @@ the sim: exactly one command per physics step); ``tick_source: sim_clock`` one p
 pose estimator, ``estimator.*``, supplies the pose between messages); ``tick_source: clock``
 steps at ``control_rate`` on the node clock: on the wall clock a dedicated thread, while
 active, sleeps to absolute deadlines; under ``use_sim_time`` a step is made from the
-executor once a period of the latest ``/clock`` has passed (a thread waking on each
-``/clock`` through rclpy's ``Clock.sleep_until`` cost a third of a core at 1 kHz, and the
-loop kept only 600 of its 1000 steps a second on a 2-core machine beside the sim).
+executor once a period of the latest ``/clock`` has passed; a step not made in time is not
+made up (why not a thread waking on each ``/clock``: doc/performance.md).
 """
 
 from contextlib import contextmanager
