@@ -24,6 +24,7 @@ from nfmr_dlsmc.cli.common import (
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.core.steering_presets import declared_lag_note
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
 
 
@@ -95,6 +96,11 @@ def _run(args) -> int:
                                  args.trajectory, args.sensing, args.path, args.steering)
     duration = evaluation.duration
     check_run_length(duration, evaluation.params.dlsmc.dt)
+    if evaluation.world is not None and args.controller == 'dlsmc':
+        note = declared_lag_note(evaluation.params.dlsmc.steer_lag,
+                                 evaluation.world.motors.steer_lag)
+        if note:
+            print(f'nfmr-eval: note: {note}', file=sys.stderr)
     show = args.plant == 'pybullet' and sys.stderr.isatty()
 
     def progress(t):

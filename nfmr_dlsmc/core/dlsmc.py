@@ -30,8 +30,8 @@ class DlsmcController(CascadeController):
 
     def __init__(self, config: DlsmcConfig | None = None):
         config = DlsmcConfig() if config is None else config
-        super().__init__(BtintsmcOuterLoop(config.outer), AbfsmcInnerLoop(config.inner),
-                         name='dlsmc')
+        super().__init__(BtintsmcOuterLoop(config.outer),
+                         AbfsmcInnerLoop(config.inner_in_use), name='dlsmc')
         self.config = config
 
     @property
@@ -55,7 +55,7 @@ class DlsmcController(CascadeController):
         self._align = config.align_speed
         self._analytic = config.thetadot_source == 'analytic'
         self.outer.gains = config.outer
-        self.inner.gains = config.inner
+        self.inner.gains = config.inner_in_use
         self.inner.omega_max = config.limits.omega_max
 
     def telemetry(self) -> tuple:

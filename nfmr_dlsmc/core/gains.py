@@ -8,7 +8,7 @@ YAML / ROS parameter prefix, e.g. ``outer.C1``), the value and the rule. The sam
 guard parameter files and live parameter changes.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import ClassVar
 
@@ -209,6 +209,14 @@ class DlsmcConfig:
                               'down, and turns on a tighter circle, while its heading is far '
                               'from theta_d instead of looping round the reference; no '
                               'effect once theta_e is small (false: the paper)', FLAG)
+    steer_lag: float = param(0.0, 's', "robot option: the time constant of the robot's "
+                             'steer servos (their first-order lag), as declared; the inner '
+                             "loop's boundary layer is then at least steer_lag_layer "
+                             'steer_lag^2, so that its gain stays below what the lag lets '
+                             'through (doc/design.md, D30; 0: instant steering, the paper)',
+                             NON_NEGATIVE)
+    steer_lag_layer: float = param(10.0, 'rad/s^2', 'the least boundary layer per squared '
+                                   'second of steer_lag', POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -222,4 +230,19 @@ class DlsmcConfig:
         """Tell whether every robot-profile option is off (the paper's equations)."""
         return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
                 and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference'
-                and self.omega_filter == 0.0 and not self.align_speed)
+                and self.omega_filter == 0.0 and not self.align_speed
+                and self.steer_lag == 0.0)
+
+    @property
+    def inner_in_use(self) -> InnerLoopGains:
+        """
+        Return the inner loop's gains as the law uses them: with the declared steering.
+
+        The boundary layer phi is at least ``steer_lag_layer`` ``steer_lag``^2 [rad]
+        (doc/design.md, D30): the switching term's gain eta_hat / phi then stays below what
+        a steering that lags by ``steer_lag`` [s] follows without a limit cycle.
+        """
+        layer = self.steer_lag_layer * self.steer_lag ** 2
+        if layer <= self.inner.boundary_layer:
+            return self.inner
+        return replace(self.inner, boundary_layer=layer)

@@ -12,7 +12,7 @@ from types import MappingProxyType
 
 from nfmr_dlsmc.core.validation import ParameterError
 
-__all__ = ['STEERING_KEYS', 'STEERING_PRESETS', 'with_steering']
+__all__ = ['declared_lag_note', 'STEERING_KEYS', 'STEERING_PRESETS', 'with_steering']
 
 #: The sim parameters a preset sets, with their units.
 STEERING_KEYS = MappingProxyType({
@@ -52,3 +52,17 @@ def with_steering(flat: dict, preset: str) -> dict:
                              f"must be one of {', '.join(STEERING_PRESETS)}")
     kept = {k: v for k, v in flat.items() if k not in STEERING_KEYS and k != 'steer_motors'}
     return {**kept, **STEERING_PRESETS[preset]}
+
+
+def declared_lag_note(declared: float, simulated: float) -> str | None:
+    """
+    Return a note when the controller's declared steer lag is not the simulated one.
+
+    ``declared`` is the controller's ``steer_lag`` [s], ``simulated`` the sim's
+    ``motors.steer_lag`` [s]. A user's guess of their servo may be wrong, so a difference
+    is allowed; the run says so (None when they are equal).
+    """
+    if declared == simulated:
+        return None
+    return (f'the controller declares steer_lag = {declared:g} s but the simulated steer '
+            f'motors lag by motors.steer_lag = {simulated:g} s (doc/steering.md)')
