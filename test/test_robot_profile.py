@@ -134,9 +134,15 @@ def test_profile_options_are_validated_with_their_names():
         DlsmcConfig(thetadot_source='analytic', thetadot_filter=0.02)
     with pytest.raises(ParameterError, match=r"align_speed = 'yes': must be true or false"):
         DlsmcConfig(align_speed='yes')
-    with pytest.raises(ParameterError, match="batch simulator implements the paper's law only"):
+    with pytest.raises(ParameterError, match=(
+            r"vectorises the paper's law only, and this one sets outer.linear_zone = 0.02, "
+            r"inner.boundary_layer = 0.02, inner.eta_max = 0.5, thetadot_source = 'analytic', "
+            r'omega_filter = 0.01, align_speed = True: run it robot by robot')):
         simulate_batch(robot_params().dlsmc, make_trajectory('sine'), [(1.0, 4.0, 0.0)], 1.0)
     assert DlsmcConfig().is_paper_law and not DlsmcConfig(align_speed=True).is_paper_law
+    assert DlsmcConfig().robot_options == {}
+    assert DlsmcConfig(steer_lag=0.1, omega_filter=0.01).robot_options == {
+        'omega_filter': 0.01, 'steer_lag': 0.1}
 
 
 # -- the speed aligned with the heading --------------------------------------------------

@@ -226,12 +226,21 @@ class DlsmcConfig:
                                  'rate needs no filter)', 's')
 
     @property
+    def robot_options(self) -> dict:
+        """Return the robot-profile options that are on: parameter name -> its value."""
+        values = {'outer.linear_zone': self.outer.linear_zone,
+                  'inner.boundary_layer': self.inner.boundary_layer,
+                  'inner.eta_max': self.inner.eta_max, 'thetadot_source': self.thetadot_source,
+                  'omega_filter': self.omega_filter, 'align_speed': self.align_speed,
+                  'steer_lag': self.steer_lag}
+        paper = {'thetadot_source': 'difference', 'align_speed': False}
+        return {name: value for name, value in values.items()
+                if value != paper.get(name, 0.0)}
+
+    @property
     def is_paper_law(self) -> bool:
         """Tell whether every robot-profile option is off (the paper's equations)."""
-        return (self.outer.linear_zone == 0.0 and self.inner.boundary_layer == 0.0
-                and self.inner.eta_max == 0.0 and self.thetadot_source == 'difference'
-                and self.omega_filter == 0.0 and not self.align_speed
-                and self.steer_lag == 0.0)
+        return not self.robot_options
 
     @property
     def inner_in_use(self) -> InnerLoopGains:

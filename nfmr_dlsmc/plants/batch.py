@@ -107,9 +107,10 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     by robot with :func:`~nfmr_dlsmc.plants.kinematic.simulate`.
     """
     if not config.is_paper_law:
-        raise ParameterError('config', 'robot profile', 'the batch simulator implements the '
-                             "paper's law only (outer.linear_zone, inner.boundary_layer and "
-                             'inner.eta_max 0, thetadot_source difference)')
+        on = ', '.join(f'{name} = {value!r}' for name, value in config.robot_options.items())
+        raise ParameterError('config', 'robot profile', "the batch simulator vectorises the "
+                             f"paper's law only, and this one sets {on}: run it robot by "
+                             'robot (plants.kinematic.simulate, as nfmr-montecarlo does)')
     x0 = np.atleast_2d(np.asarray(x0, dtype=float))
     if x0.ndim != 2 or x0.shape[1] != 3:
         raise ParameterError('x0', x0.shape, 'must have shape (N, 3): x [m], y [m], theta [rad]')
