@@ -108,7 +108,7 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
     """
     if not config.is_paper_law:
         on = ', '.join(f'{name} = {value!r}' for name, value in config.robot_options.items())
-        raise ParameterError('config', 'robot profile', "the batch simulator vectorises the "
+        raise ParameterError('config', 'robot profile', 'the batch simulator vectorises the '
                              f"paper's law only, and this one sets {on}: run it robot by "
                              'robot (plants.kinematic.simulate, as nfmr-montecarlo does)')
     x0 = np.atleast_2d(np.asarray(x0, dtype=float))
