@@ -184,6 +184,7 @@ def test_passed_when_level_with_the_goal_or_beyond_it_along_its_heading(gyaw):
         if passed:
             assert outcome(controller) == 'passed the goal' and (v, omega) == (0.0, 0.0)
             assert controller.position_error == pytest.approx(math.hypot(*robot), abs=1e-15)
+            assert controller.yaw_error == 0.0  # facing along the goal's heading
         else:
             assert (v, omega) == (0.3, 0.0)  # the law drives on
 
@@ -204,18 +205,20 @@ def test_passed_only_once_the_reference_rests_at_the_goal(reference, xdot, ydot,
 # -- rule 4: timed out ----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize('dt', [0.125, None])
-def test_timed_out_only_after_more_than_the_goal_timeout_at_rest(dt):
+@pytest.mark.parametrize('dt, period', [(0.125, 0.125), (None, 0.125), (0.125, 0.004)])
+def test_timed_out_only_after_more_than_the_goal_timeout_at_rest(dt, period):
     # Behind the goal and beside it, the reference resting there: 0.5 s of rest is not yet
-    # beyond goal_timeout = 0.5 s (steps of 1/8 s, or the law's period of 1/8 s).
-    controller = left(period=0.125)
-    blocked = (-0.01, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0, dt)
+    # beyond goal_timeout = 0.5 s (steps of 1/8 s, or the law's period of 1/8 s; a step's
+    # own length counts, not the period, when it is given).
+    controller = left(period=period)
+    blocked = (-0.01, 0.1, 0.2, 0.0, 0.0, 0.0, 0.0, dt)
     for _ in range(4):
         assert controller.step(*blocked) == (0.3, 0.0)
     assert not controller.ended
     assert controller.step(*blocked) == (0.0, 0.0)
     assert outcome(controller) == 'goal timeout'
     assert controller.position_error == pytest.approx(math.hypot(0.01, 0.1), abs=1e-15)
+    assert controller.yaw_error == pytest.approx(0.2, abs=1e-15)
 
 
 def test_only_time_at_rest_at_the_goal_counts_towards_the_timeout_and_reset_clears_it():
@@ -346,7 +349,8 @@ def test_slow_at_rest_the_steering_is_held():
     ({'offset': (0.0, TOL)}, True),  # the robot on the tolerance from the reference
     ({'offset': (0.0, TOL * 1.001)}, False),  # beyond it
     ({'offset': (-TOL, 0.0)}, True),
-], ids=['near', 'off', 'at-v_min', 'on-tolerance', 'beyond', 'behind'])
+    ({'offset': (-TOL * 1.5, 0.0)}, False),  # behind by more: the distance, not y alone
+], ids=['near', 'off', 'at-v_min', 'on-tolerance', 'beyond', 'behind', 'behind-beyond'])
 def test_slow_the_rule_applies_only_near_a_reference_slower_than_v_min(kwargs, applies):
     ((v, omega),) = slow(0.1, 0.5, **kwargs)
     assert v == 0.1 and (omega != 0.5) == applies
