@@ -443,6 +443,47 @@ def test_the_smoothed_position_starts_at_the_estimate_and_holds_on_a_repeated_ti
     assert estimator.pose(0.001) == first
 
 
+def test_after_an_exact_message_the_smoothing_goes_on_from_the_position_handed_on():
+    # An exact message (sigma 0) is handed on as it is, and the position then handed on is
+    # where the smoothing of the next, noisy message starts: it takes that message's step up
+    # over tau from there, x and y each from its own.
+    tau = 0.005
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, correction_smoothing=tau))
+    plain = PoseEstimator(EstimatorConfig(enabled=True))
+    for e in (estimator, plain):
+        e.measure(0.0, 5.0, -3.0, 0.4, (0.0, 0.0))
+    assert estimator.pose(0.0) == plain.pose(0.0) == pytest.approx((5.0, -3.0, 0.4),
+                                                                   abs=1e-15)
+    for e in (estimator, plain):
+        e.command(0.0, 0.0)
+        e.measure(0.001, 5.002, -2.999, 0.4, (0.001, 0.001))
+    first, estimate = estimator.pose(0.001), plain.pose(0.001)
+    gain = -math.expm1(-0.001 / tau)
+    assert first[0] == pytest.approx(5.0 + gain * (estimate[0] - 5.0), abs=1e-15)
+    assert first[1] == pytest.approx(-3.0 + gain * (estimate[1] + 3.0), abs=1e-15)
+    assert min(estimate[0] - 5.0, estimate[1] + 3.0) > 5e-5  # steps the smoothing takes up
+
+
+def test_messages_stamped_before_the_first_tick_are_all_fused():
+    # Three exact messages arrive before the law's first tick: the estimate at that tick is
+    # the last of them (the robot at rest, no command yet).
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    for stamp, x in ((0.0, 1.0), (0.0004, 1.0002), (0.0008, 1.0004)):
+        estimator.measure(stamp, x, 2.0, 0.1, (0.0, 0.0))
+    assert estimator.pose(0.001) == pytest.approx((1.0004, 2.0, 0.1), abs=1e-12)
+
+
+def test_a_tick_not_commanded_drives_on_with_the_last_command():
+    # The law's command reaches the estimator after its tick; a tick without one (a stopped
+    # loop, a test) predicts on with the command before it.
+    estimator = PoseEstimator(EstimatorConfig(enabled=True))
+    estimator.measure(0.0, 0.0, 0.0, 0.0, (0.0, 0.0))
+    estimator.pose(0.0)
+    estimator.command(0.5, 0.0)
+    estimator.pose(0.001)  # no command after this tick
+    assert estimator.pose(0.002)[0] == pytest.approx(0.5 * 0.002, abs=1e-12)
+
+
 def test_the_history_keeps_the_tick_at_its_horizon_and_the_counters_count_each_message():
     # Ticks every 2^-10 s, a history of 1/8 s: at t = 1 s the oldest tick kept is the one
     # at 7/8 s (binary fractions: the bound is exact). A message stamped there is fused, one
