@@ -24,6 +24,20 @@ def test_error_criteria_of_a_known_signal():
     assert c.std == pytest.approx(np.sqrt(np.mean((e - 0.5) ** 2)))
 
 
+def test_the_std_weighs_each_sample_by_its_duration_as_the_integrals_do():
+    # A 1 ms run that lost every other sample of its second half (a recorder behind a
+    # starved machine): each sample left stands for 2 ms, and the figures are those of
+    # the whole run.
+    e = np.r_[np.full(1000, 1.0), np.full(1000, 3.0)]
+    whole = error_criteria(e, 0.001)
+    kept = np.r_[e[:1000], e[1000::2]]
+    lost = error_criteria(kept, np.r_[np.full(1000, 0.001), np.full(500, 0.002)])
+    assert whole.std == pytest.approx(1.0, abs=1e-12)
+    assert (lost.iae, lost.ise, lost.std) == pytest.approx((whole.iae, whole.ise, whole.std),
+                                                           abs=1e-9)
+    assert float(np.std(kept)) == pytest.approx(0.943, abs=1e-3)  # the unweighted one drifts
+
+
 def test_convergence_time_is_last_exceedance():
     t = np.arange(6) * 1.0
     assert convergence_time(t, np.array([5, 0.002, 0.0005, 0.0011, 0.0009, 0.0])) == 3.0

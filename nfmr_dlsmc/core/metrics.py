@@ -80,11 +80,25 @@ class ErrorCriteria:
 
 
 def error_criteria(error: np.ndarray, dt) -> ErrorCriteria:
-    """Return IAE = sum |e| dt, ISE = sum e^2 dt and the (population) standard deviation of e."""
+    """
+    Return IAE = sum |e| dt, ISE = sum e^2 dt and the standard deviation of e over time.
+
+    The standard deviation weighs each sample by its duration ``dt`` [s] (a scalar, or one
+    per sample), as the integrals do: over the paper's uniform steps it is the population
+    standard deviation of the samples; over a recorded run that lost some of them, each
+    one left stands for the time until the next.
+    """
     error = np.asarray(error, dtype=float)
+    weights = np.broadcast_to(np.asarray(dt, dtype=float), error.shape)
+    total = float(np.sum(weights))
+    if error.size and total > 0.0:
+        mean = float(np.sum(error * weights)) / total
+        std = math.sqrt(float(np.sum(weights * (error - mean) ** 2)) / total)
+    else:
+        std = float(np.std(error))
     return ErrorCriteria(iae=float(np.sum(np.abs(error) * dt)),
                          ise=float(np.sum(error ** 2 * dt)),
-                         std=float(np.std(error)))
+                         std=std)
 
 
 def convergence_time(t: np.ndarray, distance: np.ndarray,
