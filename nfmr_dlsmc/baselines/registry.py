@@ -65,7 +65,8 @@ _SINGLE_LOOP = {
 #: The DLSMC's blocks: ``outer`` and ``inner`` sections and these DlsmcConfig options.
 _DLSMC_NAMES = ('dlsmc', 'dlsmc_robot')
 _DLSMC_OPTIONS = ('thetadot_source', 'thetadot_filter', 'omega_filter', 'omega_filter_band',
-                  'align_speed')
+                  'align_speed', 'steer_lag', 'steer_lag_layer', 'steer_rate_limit',
+                  'steer_rate_zone')
 
 # name -> ((outer loop, its gains), (inner loop, its gains))
 _CRSMC_INNER = (loops.CrsmcInnerLoop, gains.CrsmcInnerGains)
@@ -128,7 +129,9 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
         Its gains: ``{gain: value}`` for a single-loop law, ``{"outer": {...},
         "inner": {...}}`` for a cascade; the DLSMC's (``dlsmc``, ``dlsmc_robot``) may also
         set ``thetadot_source``, ``thetadot_filter`` [s], ``omega_filter`` [s],
-        ``omega_filter_band`` [rad] and ``align_speed`` (:class:`DlsmcConfig`).
+        ``omega_filter_band`` [rad], ``align_speed`` and the declared steering (``steer_lag``
+        [s], ``steer_lag_layer``, ``steer_rate_limit`` [rad/s], ``steer_rate_zone``;
+        :class:`DlsmcConfig`).
     limits : InputLimits, optional
         Input saturation shared by every controller (paper values by default).
     dt : float

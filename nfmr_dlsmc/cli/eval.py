@@ -24,7 +24,7 @@ from nfmr_dlsmc.cli.common import (
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
-from nfmr_dlsmc.core.steering_presets import declared_lag_note
+from nfmr_dlsmc.core.steering_presets import declared_steering_note
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
 
 
@@ -97,8 +97,9 @@ def _run(args) -> int:
     duration = evaluation.duration
     check_run_length(duration, evaluation.params.dlsmc.dt)
     if evaluation.world is not None and args.controller == 'dlsmc':
-        note = declared_lag_note(evaluation.params.dlsmc.steer_lag,
-                                 evaluation.world.motors.steer_lag)
+        dlsmc, motors = evaluation.params.dlsmc, evaluation.world.motors
+        note = declared_steering_note(dlsmc.steer_lag, dlsmc.steer_rate_limit,
+                                      motors.steer_lag, motors.steer_rate_limit)
         if note:
             print(f'nfmr-eval: note: {note}', file=sys.stderr)
     show = args.plant == 'pybullet' and sys.stderr.isatty()

@@ -30,7 +30,7 @@ class DlsmcController(CascadeController):
 
     def __init__(self, config: DlsmcConfig | None = None):
         config = DlsmcConfig() if config is None else config
-        super().__init__(BtintsmcOuterLoop(config.outer),
+        super().__init__(BtintsmcOuterLoop(config.outer_in_use),
                          AbfsmcInnerLoop(config.inner_in_use), name='dlsmc')
         self.config = config
 
@@ -54,7 +54,7 @@ class DlsmcController(CascadeController):
         self._omega_band = config.omega_filter_band
         self._align = config.align_speed
         self._analytic = config.thetadot_source == 'analytic'
-        self.outer.gains = config.outer
+        self.outer.gains = config.outer_in_use
         self.inner.gains = config.inner_in_use
         self.inner.omega_max = config.limits.omega_max
 

@@ -217,6 +217,17 @@ class DlsmcConfig:
                              NON_NEGATIVE)
     steer_lag_layer: float = param(10.0, 'rad/s^2', 'the least boundary layer per squared '
                                    'second of steer_lag', POSITIVE)
+    steer_rate_limit: float = param(0.0, 'rad/s', "robot option: the top speed of the robot's "
+                                    'steer servos, as declared; the linear zone of the outer '
+                                    "loop's alpha(e) is then at least steer_rate_zone / "
+                                    'steer_rate_limit^2, so that the position loop does not '
+                                    'ask for turns faster than the steering makes them '
+                                    '(doc/design.md, D31; 0: not declared, instant steering as '
+                                    'in the paper)', NON_NEGATIVE,
+                                    also='0 or > sqrt(steer_rate_zone / outer.xi)')
+    steer_rate_zone: float = param(0.6, 'm rad^2/s^2', 'the least linear zone of alpha(e) '
+                                   'times the square of the declared steer_rate_limit',
+                                   POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -224,6 +235,14 @@ class DlsmcConfig:
             raise ParameterError('thetadot_filter', self.thetadot_filter,
                                  'must be 0 with thetadot_source = analytic (the analytic '
                                  'rate needs no filter)', 's')
+        if self.steer_rate_limit > 0.0 and self.steer_rate_zone / self.steer_rate_limit ** 2 \
+                >= self.outer.xi:
+            slowest = math.sqrt(self.steer_rate_zone / self.outer.xi)
+            raise ParameterError('steer_rate_limit', self.steer_rate_limit,
+                                 f'must be 0 (not declared) or > sqrt(steer_rate_zone / '
+                                 f'outer.xi) = '
+                                 f'{slowest:g} rad/s: a slower steering would need a linear '
+                                 'zone of alpha(e) as wide as its phase boundary', 'rad/s')
 
     @property
     def robot_options(self) -> dict:
@@ -232,7 +251,7 @@ class DlsmcConfig:
                   'inner.boundary_layer': self.inner.boundary_layer,
                   'inner.eta_max': self.inner.eta_max, 'thetadot_source': self.thetadot_source,
                   'omega_filter': self.omega_filter, 'align_speed': self.align_speed,
-                  'steer_lag': self.steer_lag}
+                  'steer_lag': self.steer_lag, 'steer_rate_limit': self.steer_rate_limit}
         paper = {'thetadot_source': 'difference', 'align_speed': False}
         return {name: value for name, value in values.items()
                 if value != paper.get(name, 0.0)}
@@ -255,3 +274,21 @@ class DlsmcConfig:
         if layer <= self.inner.boundary_layer:
             return self.inner
         return replace(self.inner, boundary_layer=layer)
+
+    @property
+    def outer_in_use(self) -> OuterLoopGains:
+        """
+        Return the outer loop's gains as the law uses them: with the declared steering.
+
+        With a declared ``steer_rate_limit`` [rad/s] the linear zone d of alpha(e) (eq. 33)
+        is at least ``steer_rate_zone`` / ``steer_rate_limit``^2 [m] (doc/design.md, D31): the
+        position loop's gain near the path, C alpha(d) / d, then falls as the steering
+        slows, and the turn it asks for as the robot closes on the path is one the
+        steering makes.
+        """
+        if self.steer_rate_limit == 0.0:
+            return self.outer
+        zone = self.steer_rate_zone / self.steer_rate_limit ** 2
+        if zone <= self.outer.linear_zone:
+            return self.outer
+        return replace(self.outer, linear_zone=zone)

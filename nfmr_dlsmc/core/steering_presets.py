@@ -12,7 +12,7 @@ from types import MappingProxyType
 
 from nfmr_dlsmc.core.validation import ParameterError
 
-__all__ = ['declared_lag_note', 'STEERING_KEYS', 'STEERING_PRESETS', 'with_steering']
+__all__ = ['declared_steering_note', 'STEERING_KEYS', 'STEERING_PRESETS', 'with_steering']
 
 #: The sim parameters a preset sets, with their units.
 STEERING_KEYS = MappingProxyType({
@@ -54,15 +54,26 @@ def with_steering(flat: dict, preset: str) -> dict:
     return {**kept, **STEERING_PRESETS[preset]}
 
 
-def declared_lag_note(declared: float, simulated: float) -> str | None:
+def declared_steering_note(declared_lag: float, declared_rate: float, simulated_lag: float,
+                           simulated_rate: float) -> str | None:
     """
-    Return a note when the controller's declared steer lag is not the simulated one.
+    Return a note when the controller's declared steering is not the simulated one.
 
-    ``declared`` is the controller's ``steer_lag`` [s], ``simulated`` the sim's
-    ``motors.steer_lag`` [s]. A user's guess of their servo may be wrong, so a difference
-    is allowed; the run says so (None when they are equal).
+    ``declared_lag`` [s] and ``declared_rate`` [rad/s] are the controller's ``steer_lag``
+    and ``steer_rate_limit`` (0: not declared, taken as the ``ideal`` preset's rate);
+    ``simulated_lag`` and ``simulated_rate`` the sim's ``motors.steer_lag`` and
+    ``motors.steer_rate_limit``. A user's guess of their servo may be wrong, so a
+    difference is allowed; the run says so (None when they agree).
     """
-    if declared == simulated:
+    rate = declared_rate or STEERING_PRESETS['ideal']['motors.steer_rate_limit']
+    differences = []
+    if declared_lag != simulated_lag:
+        differences.append(f'steer_lag = {declared_lag:g} s but the simulated steer motors lag '
+                           f'by motors.steer_lag = {simulated_lag:g} s')
+    if rate != simulated_rate:
+        differences.append(f'steer_rate_limit = {declared_rate:g} rad/s but the simulated '
+                           f'steer motors turn at up to motors.steer_rate_limit = '
+                           f'{simulated_rate:g} rad/s')
+    if not differences:
         return None
-    return (f'the controller declares steer_lag = {declared:g} s but the simulated steer '
-            f'motors lag by motors.steer_lag = {simulated:g} s (doc/steering.md)')
+    return f"the controller declares {' and '.join(differences)} (doc/steering.md)"

@@ -29,7 +29,11 @@ from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
-from nfmr_dlsmc.core.steering_presets import declared_lag_note, STEERING_PRESETS, with_steering
+from nfmr_dlsmc.core.steering_presets import (
+    declared_steering_note,
+    STEERING_PRESETS,
+    with_steering,
+)
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.clock_watch import ClockWatch
@@ -177,7 +181,9 @@ def run(options: RunOptions) -> int:
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
-    note = declared_lag_note(params.dlsmc.steer_lag, settings.world.motors.steer_lag)
+    motors = settings.world.motors
+    note = declared_steering_note(params.dlsmc.steer_lag, params.dlsmc.steer_rate_limit,
+                                  motors.steer_lag, motors.steer_rate_limit)
     if note:
         print(f'nfmr-run: note: {note}', file=sys.stderr)
     if round(options.duration / params.dlsmc.dt) < 1:
