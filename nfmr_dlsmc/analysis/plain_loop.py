@@ -10,7 +10,9 @@ classes, no calls between loops and no telemetry. ``nfmr-bench`` times it beside
 package's loop in the same run: their ratio says what the package's structure costs on any
 machine, where steps per second alone say as much about the machine as about the code.
 It takes the paper's gains (``DlsmcConfig()``, section 4.1) and nothing else: no robot
-option, no anti-windup, no adaptive ratio.
+option, no anti-windup, no adaptive ratio. Only the benchmarks import it; no law does, at
+any depth (``test/test_architecture.py``): the laws run each equation, the saturation and
+the wrap from their one function.
 """
 
 import math

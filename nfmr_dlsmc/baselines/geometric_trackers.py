@@ -10,6 +10,7 @@ from nfmr_dlsmc.baselines.gains import KanayamaGains, PurePursuitGains, StanleyG
 from nfmr_dlsmc.baselines.path_frame import robot_frame_errors
 from nfmr_dlsmc.baselines.single_loop import SingleLoopController
 from nfmr_dlsmc.core.angles import wrap_angle
+from nfmr_dlsmc.core.saturation import saturate_speed
 
 
 class PurePursuitController(SingleLoopController):
@@ -39,7 +40,7 @@ class PurePursuitController(SingleLoopController):
         distance = max(math.hypot(dx, dy), 1e-9)
         e1, _, _ = robot_frame_errors(x, y, theta, x_d, y_d, ref.theta_r)
         v = ref.v_r + g.k_v * e1
-        driven = min(max(v, self.speed_floor(ref.v_r)), self._limits.v_max)
+        driven = saturate_speed(v, self.speed_floor(ref.v_r), self._limits)
         self.theta_d = bearing
         return v, 2.0 * driven * math.sin(alpha) / distance
 

@@ -16,7 +16,11 @@ from nfmr_dlsmc.baselines.path_frame import (
 )
 from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.gains import InputLimits
-from nfmr_dlsmc.core.saturation import saturate_inputs, SaturatedController
+from nfmr_dlsmc.core.saturation import (
+    saturate_speed,
+    saturate_yaw_rate,
+    SaturatedController,
+)
 from nfmr_dlsmc.core.sliding_functions import sign
 
 
@@ -75,8 +79,9 @@ class SingleLoopController(SaturatedController):
             dt = self._dt
         self.ref.update(xdot_d, ydot_d, dt)
         v_raw, omega_raw = self._law(x, y, theta, x_d, y_d, dt)
-        v, omega, self.v_saturated, self.omega_saturated = saturate_inputs(
-            v_raw, omega_raw, self._limits, self.speed_floor(self.ref.v_r))
+        v = saturate_speed(v_raw, self.speed_floor(self.ref.v_r), self._limits)
+        omega = saturate_yaw_rate(omega_raw, self._limits)
+        self.v_saturated, self.omega_saturated = v != v_raw, omega != omega_raw
         self.x_e, self.y_e = x - x_d, y - y_d
         self.theta_e = (wrap_angle(theta - self.theta_d) if math.isfinite(self.theta_d)
                         else math.nan)

@@ -7,6 +7,8 @@ import numpy as np
 __all__ = ['wrap_angle', 'wrap_angles', 'yaw_from_quaternion']
 
 _TWO_PI = 2.0 * math.pi
+# Looked up once: wrap_angle runs twice in every step of the cascade.
+_PI, _MINUS_PI, _remainder = math.pi, -math.pi, math.remainder
 
 
 def wrap_angle(angle: float) -> float:
@@ -24,8 +26,8 @@ def wrap_angle(angle: float) -> float:
         The equivalent angle in (-pi, pi] [rad].
 
     """
-    wrapped = math.remainder(angle, _TWO_PI)  # in [-pi, pi]
-    return math.pi if wrapped == -math.pi else wrapped
+    wrapped = _remainder(angle, _TWO_PI)  # in [-pi, pi]
+    return _PI if wrapped == _MINUS_PI else wrapped
 
 
 def wrap_angles(angles: np.ndarray) -> np.ndarray:

@@ -47,6 +47,8 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
+from nfmr_dlsmc.core.angles import wrap_angle
+from nfmr_dlsmc.core.saturation import saturate_yaw_rate
 from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
@@ -175,7 +177,7 @@ class ArrivingController:
             self._left_goal = True
         dx, dy = x - gx, y - gy
         distance = math.hypot(dx, dy)
-        yaw_error = math.remainder(theta - gyaw, 2.0 * math.pi)
+        yaw_error = wrap_angle(theta - gyaw)
         speed_d = math.hypot(xdot_d, ydot_d)
         if not self._left_goal:
             return self._steered(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d, yddot_d,
@@ -206,15 +208,15 @@ class ArrivingController:
         v, omega = self.controller.step(x, y, theta, x_d, y_d, xdot_d, ydot_d, dt, xddot_d,
                                         yddot_d)
         config = self.config
-        v_min = self.controller.limits.v_min
+        limits = self.controller.limits
+        v_min = limits.v_min
         if (config.slow_curvature_band > 0.0 and speed_d < v_min
                 and math.hypot(x - x_d, y - y_d) <= config.goal_tolerance):
             if v <= 0.0:
                 return v, 0.0  # at rest: the steering is held
             # The reference's curvature (xdot yddot - ydot xddot) / |v_d|^3 [1/m], no more
             # than omega_max allows at this v (a reference at rest has none).
-            omega_max = self.controller.limits.omega_max
-            reach = omega_max / v
+            reach = limits.omega_max / v
             cubed = speed_d ** 3
             kappa_d = ((xdot_d * yddot_d - ydot_d * xddot_d) / cubed if cubed > 0.0 else 0.0)
             kappa_d = min(max(kappa_d, -reach), reach)
@@ -225,7 +227,7 @@ class ArrivingController:
             step = config.slow_curvature_rate * (self.controller.period if dt is None else dt)
             curvature = min(max(curvature, previous - step), previous + step)
             self._curvature = curvature
-            return v, min(max(curvature * v, -omega_max), omega_max)
+            return v, saturate_yaw_rate(curvature * v, limits)
         if v > 0.0:
             self._curvature = omega / v
         return v, omega

@@ -2,12 +2,11 @@
 
 import math
 
+from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.gains import InputLimits
-from nfmr_dlsmc.core.saturation import SaturatedController
+from nfmr_dlsmc.core.saturation import saturate_speed, saturate_yaw_rate, SaturatedController
 
 __all__ = ['CascadeController']
-
-_TWO_PI = 2.0 * math.pi
 
 
 class CascadeController(SaturatedController):
@@ -31,9 +30,10 @@ class CascadeController(SaturatedController):
        with this step's saturated v;
     4. s_theta = theta_e = wrap(theta - theta_d) (eqs 8, 10);
        attitude loop ``inner.step(s_theta, thetadot_d, dt) -> omega``;
-    5. saturation v in [v_min, v_max], |omega| <= omega_max (v_min lowered to a slower
-       reference's speed with ``follow_slow_reference``); with ``align_speed`` the speed
-       saturated is v = sqrt(u_x^2 + u_y^2) max(cos(s_theta), 0) instead (robot option,
+    5. saturation v in [v_min, v_max], |omega| <= omega_max
+       (:mod:`~nfmr_dlsmc.core.saturation`; v_min lowered to a slower reference's speed
+       with ``follow_slow_reference``); with ``align_speed`` the speed saturated is
+       v = sqrt(u_x^2 + u_y^2) max(cos(s_theta), 0) instead (robot option,
        doc/design.md, D24): the robot slows down, and so turns on a tighter circle, while
        its heading is far from theta_d. With ``follow_slow_reference`` too (a path,
        doc/design.md, D27) the robot turns first: the lower bound is scaled by
@@ -129,27 +129,22 @@ class CascadeController(SaturatedController):
         theta_d = math.atan2(u_y, u_x)
         v_raw = math.hypot(u_x, u_y)
         limits = self._limits
-        v_min = limits.v_min
-        if self.follow_slow_reference:  # speed_floor written out (hot path)
-            v_ref = math.hypot(xdot_d, ydot_d)
-            if v_ref < v_min:
-                v_min = v_ref
-        s_theta = math.remainder(theta - theta_d, _TWO_PI)
-        if s_theta == -math.pi:
-            s_theta = math.pi
+        # The reference's speed only where a slow one lowers the floor (not in the paper).
+        v_floor = (self.speed_floor(math.hypot(xdot_d, ydot_d)) if self.follow_slow_reference
+                   else limits.v_min)
+        s_theta = wrap_angle(theta - theta_d)
         if self._align:
             share = max(math.cos(s_theta), 0.0)
             v_want = v_raw * share
             if self.follow_slow_reference:  # on a path: turn first (step 5, D27)
-                v_min *= share
+                v_floor *= share
                 across = abs(math.sin(s_theta))  # v across theta_d at most limits.v_min
                 if v_want * across > limits.v_min:
                     v_want = limits.v_min / across
                 self.outer.advance = share
         else:
             v_want = v_raw
-        v = v_min if v_want < v_min else (limits.v_max if v_want > limits.v_max else v_want)
-        # wrap_angle and saturate_inputs written out: this is the 1 kHz hot path.
+        v = saturate_speed(v_want, v_floor, limits)
         if self._analytic:
             udot_x, udot_y = self.outer.input_rate(v * math.cos(theta) - xdot_d,
                                                    v * math.sin(theta) - ydot_d,
@@ -159,18 +154,14 @@ class CascadeController(SaturatedController):
             thetadot_d = ((u_x * udot_y - u_y * udot_x) / speed_squared if speed_squared > 0.0
                           else 0.0)
         elif self._has_previous:
-            raw = math.remainder(theta_d - self.theta_d, _TWO_PI)
-            if raw == -math.pi:
-                raw = math.pi
-            raw /= dt
+            raw = wrap_angle(theta_d - self.theta_d) / dt
             # First-order low-pass; with no filter (tau = 0) the gain is 1.
             thetadot_d = self.thetadot_d + dt / (self._filter_tau + dt) * (raw - self.thetadot_d)
         else:
             thetadot_d = 0.0
         self._has_previous = True
         omega_raw = self.inner.step(s_theta, thetadot_d, dt)
-        omega = limits.omega_max if omega_raw > limits.omega_max else (
-            -limits.omega_max if omega_raw < -limits.omega_max else omega_raw)
+        omega = saturate_yaw_rate(omega_raw, limits)
         self.v_saturated = v != v_want
         self.omega_saturated = omega != omega_raw
         if self._omega_tau > 0.0 and self._omega is not None:

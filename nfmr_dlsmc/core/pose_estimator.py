@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
+from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.schema import (
     check_fields,
     documented,
@@ -198,7 +199,7 @@ class PoseEstimator:
         yaw_error = z[2] - x[2]
         if not math.isfinite(yaw_error):
             return _OVERFLOWED
-        innovation = np.array([z[0] - x[0], z[1] - x[1], math.remainder(yaw_error, math.tau)])
+        innovation = np.array([z[0] - x[0], z[1] - x[1], wrap_angle(yaw_error)])
         S = P[:3, :3] + R
         S_inv = np.linalg.inv(S)
         gate = self.config.innovation_gate

@@ -1,38 +1,59 @@
-"""Input saturation of the unicycle inputs (v, omega), section 2.2."""
+"""
+Input saturation of the unicycle inputs (v, omega), section 2.2: written once.
+
+    sat(v) = v clipped to [v_floor, v_max],
+    sat(omega) = omega clipped to [-omega_max, omega_max],
+
+with v_floor = v_min, or a slower reference's speed where the law follows one
+(:meth:`SaturatedController.speed_floor`). Every law (the cascade, the single-loop and
+geometric trackers, the arrival rules) saturates through :func:`saturate_speed` and
+:func:`saturate_yaw_rate` on floats, and the batch simulator through their element-wise
+forms :func:`saturate_speeds` and :func:`saturate_yaw_rates` on arrays, as
+:mod:`~nfmr_dlsmc.core.angles` has ``wrap_angle`` and ``wrap_angles``. The float forms run
+in every control step, so they compare inline rather than call a clip
+(doc/performance.md). ``test/test_saturation.py`` holds the two forms equal and
+``test/test_architecture.py`` fails on an input limit used as a clip's bound anywhere else.
+"""
 
 from nfmr_dlsmc.core.gains import InputLimits
+import numpy as np
 
-__all__ = ['SaturatedController', 'saturate_inputs']
+__all__ = ['SaturatedController', 'saturate_speed', 'saturate_speeds', 'saturate_yaw_rate',
+           'saturate_yaw_rates']
 
 
-def saturate_inputs(v: float, omega: float, limits: InputLimits,
-                    v_floor: float | None = None) -> tuple[float, float, bool, bool]:
+def saturate_speed(v: float, v_floor: float, limits: InputLimits) -> float:
     """
-    Clip v to [v_min, v_max] [m/s] and omega to [-omega_max, omega_max] [rad/s].
+    Return sat(v): the linear speed clipped to [v_floor, limits.v_max] [m/s] (section 2.2).
 
-    ``v_floor`` [m/s], if given, replaces v_min as the lower bound (see
-    :meth:`SaturatedController.speed_floor`).
-
-    Returns
-    -------
-    v, omega : float
-        The saturated inputs.
-    v_saturated, omega_saturated : bool
-        Whether each input was clipped.
+    Parameters
+    ----------
+    v : float
+        The law's linear speed [m/s].
+    v_floor : float
+        The least speed [m/s]: ``limits.v_min``, or :meth:`SaturatedController.speed_floor`.
+    limits : InputLimits
+        The input limits; ``limits.v_max`` is the upper bound.
 
     """
-    v_sat = v
-    floor = limits.v_min if v_floor is None else v_floor
-    if v < floor:
-        v_sat = floor
-    elif v > limits.v_max:
-        v_sat = limits.v_max
-    w_sat = omega
-    if omega > limits.omega_max:
-        w_sat = limits.omega_max
-    elif omega < -limits.omega_max:
-        w_sat = -limits.omega_max
-    return v_sat, w_sat, v_sat != v, w_sat != omega
+    v_max = limits.v_max
+    return v_floor if v < v_floor else (v_max if v > v_max else v)
+
+
+def saturate_yaw_rate(omega: float, limits: InputLimits) -> float:
+    """Return sat(omega): the yaw rate clipped to [-omega_max, omega_max] [rad/s] (section 2.2)."""
+    omega_max = limits.omega_max
+    return omega_max if omega > omega_max else (-omega_max if omega < -omega_max else omega)
+
+
+def saturate_speeds(v: np.ndarray, v_floor: float, limits: InputLimits) -> np.ndarray:
+    """Element-wise :func:`saturate_speed` for arrays [m/s] -> [m/s]."""
+    return np.clip(v, v_floor, limits.v_max)
+
+
+def saturate_yaw_rates(omega: np.ndarray, limits: InputLimits) -> np.ndarray:
+    """Element-wise :func:`saturate_yaw_rate` for arrays [rad/s] -> [rad/s]."""
+    return np.clip(omega, -limits.omega_max, limits.omega_max)
 
 
 class SaturatedController:

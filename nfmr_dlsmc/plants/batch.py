@@ -7,7 +7,9 @@ each robot with its own integrals, adaptive phase and e(0): the equations are th
 own functions (:mod:`~nfmr_dlsmc.core.outer_loop`, :mod:`~nfmr_dlsmc.core.inner_loop`,
 :mod:`~nfmr_dlsmc.core.sliding_functions`) applied to arrays, with numpy's and scipy's
 elementary functions in place of libm's (pow, sin, erf: they differ in the last bit for
-some arguments). Metrics are accumulated on the fly, so thousands of robots fit in memory.
+some arguments), and the saturation and the wrap are the element-wise forms of
+:mod:`~nfmr_dlsmc.core.saturation` and :mod:`~nfmr_dlsmc.core.angles`. Metrics are
+accumulated on the fly, so thousands of robots fit in memory.
 """
 
 from concurrent.futures import ProcessPoolExecutor
@@ -23,6 +25,7 @@ from nfmr_dlsmc.core.inner_loop import (
 )
 from nfmr_dlsmc.core.metrics import CONVERGENCE_TOLERANCE
 from nfmr_dlsmc.core.outer_loop import position_input, sliding_variable
+from nfmr_dlsmc.core.saturation import saturate_speeds, saturate_yaw_rates
 from nfmr_dlsmc.core.sliding_functions import ARRAYS, bounded_rate
 from nfmr_dlsmc.core.validation import check_positive, ParameterError
 import numpy as np
@@ -190,8 +193,8 @@ def simulate_batch(config: DlsmcConfig, trajectory, x0, duration: float,
         omega_raw = yaw_rate_command(thdot, s_th, eta, i.k1, r1, xp=ARRAYS)
         held = (np.abs(omega_raw) > lim.omega_max) if i.anti_windup else False
         eta_rate = np.where(barrier | held, 0.0, adaptation_rate(a, i.L0, i.L1))
-        v = np.clip(np.hypot(u_x, u_y), lim.v_min, lim.v_max)
-        w = np.clip(omega_raw, -lim.omega_max, lim.omega_max)
+        v = saturate_speeds(np.hypot(u_x, u_y), lim.v_min, lim)
+        w = saturate_yaw_rates(omega_raw, lim)
         # Metrics of this step, then forward Euler of eq. (3).
         d = np.hypot(x_e, y_e)
         iae += d * dt
