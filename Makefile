@@ -15,6 +15,7 @@ INDEX     := $(VENV)/share/ament_index/resource_index/packages
 $(STAMP): setup.py setup.cfg package.xml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+	# Everything: the [test] extra takes [plots], [tune] and [cluster] (setup.py).
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	# The ament layout that `ros2 run` and ament_index expect, as colcon would install it:
 	# executables in lib/<pkg>, the package marker in the index, package.xml and config.

@@ -40,25 +40,32 @@ setup(
     python_requires='>=3.10',
     install_requires=[
         'numpy>=1.26,<3',
-        'matplotlib>=3.7,<4',
-        'pillow>=9,<14',
         'scipy>=1.11,<2',
         'pyyaml>=6,<7',
         'pybullet>=3.2.6,<4',
         'mcap>=1.2,<2',
-        # The chassis study of nfmr-tune --plant pybullet (doc/design.md, D19) and its
-        # storage (SQLAlchemy, whose errors name a storage that cannot be opened).
-        'optuna>=5,<6',
-        'sqlalchemy>=2,<3',
-        # --scheduler: the sweeps on a Dask distributed cluster (doc/design.md, D22).
-        'distributed>=2026.8,<2027',
         'ros-jazzy-rclpy>=7.1,<8',
         'ros-jazzy-common-interfaces>=5.3,<6',
         'ros-jazzy-rmw-fastrtps-cpp>=8.4,<9',
         'ros-jazzy-ament-index-python>=1.8,<2',
     ],
+    # install_requires is what the controller and sim nodes need; each feature beyond them
+    # has an extra (doc/development.md, Installing). nfmr_dlsmc/runtime/extras.py names the
+    # extra in one line when a feature's package is missing.
     extras_require={
-        'test': ['pytest>=8,<10', 'mcap-ros2-support>=0.5,<0.7', 'rosbags>=0.10,<0.12',
+        # Figures and animations: nfmr-run's plots, --plots, --animate, nfmr-compare's report.
+        'plots': ['matplotlib>=3.7,<4', 'pillow>=9,<14'],
+        # The chassis study of nfmr-tune --plant pybullet (doc/design.md, D19) and its
+        # storage (SQLAlchemy, whose errors name a storage that cannot be opened); the study
+        # draws its history with [plots].
+        'tune': ['optuna>=5,<6', 'sqlalchemy>=2,<3'],
+        # --scheduler: the sweeps on a Dask distributed cluster (doc/design.md, D22).
+        'cluster': ['distributed>=2026.8,<2027'],
+        # The suite tests every feature, so it takes the other extras with its own tools:
+        # `pip install -e '.[test]'` (make setup) is all a checkout needs to run it, and no
+        # test is skipped for a package left out.
+        'test': ['nfmr_dlsmc[plots,tune,cluster]',
+                 'pytest>=8,<10', 'mcap-ros2-support>=0.5,<0.7', 'rosbags>=0.10,<0.12',
                  'hypothesis>=6.100,<7',
                  # The complexity bound on the control step (test_architecture).
                  'radon>=6,<7',

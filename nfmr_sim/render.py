@@ -3,8 +3,9 @@
 import argparse
 import math
 
-import matplotlib.pyplot as plt
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
+from nfmr_dlsmc.runtime.extras import MissingExtra, require
+from nfmr_dlsmc.runtime.user_errors import report_user_error
 from nfmr_sim.world import ChassisWorld
 import numpy as np
 
@@ -28,6 +29,12 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog='python -m nfmr_sim.render')
     parser.add_argument('out', nargs='?', default='chassis.png')
     args = parser.parse_args(argv)
+    try:
+        require('writing the PNG', 'plots')
+    except MissingExtra as exc:
+        return report_user_error(parser.prog, exc)
+    import matplotlib.pyplot as plt
+
     with ChassisWorld() as world:
         cmd = wheel_commands(0.3, 0.8, RobotGeometry(), SteerMode(1.0, 0.0))
         world.set_wheel_commands(cmd.steer, cmd.wheel_speed)

@@ -7,8 +7,7 @@ import subprocess
 import sys
 
 from builtin_interfaces.msg import Time
-from nfmr_dlsmc.analysis.animation import AnimationConfig
-from nfmr_dlsmc.analysis.animation_timing import PATH_STEP
+from nfmr_dlsmc.analysis.animation_timing import AnimationConfig, PATH_STEP
 from nfmr_dlsmc.bag.reader import BagError, read_bag
 from nfmr_dlsmc.cli.analyze import main as analyze_main
 from nfmr_dlsmc.core.dlsmc import DlsmcController

@@ -3,8 +3,8 @@
 import matplotlib.animation
 from nfmr_dlsmc import DlsmcController, make_trajectory, simulate
 from nfmr_dlsmc.analysis.animation import (
-    animate_run, AnimationConfig, AnimationError, frame_times, RunSeries, save_frame,
-    series_from_sim)
+    animate_run, AnimationError, save_frame, series_from_sim)
+from nfmr_dlsmc.analysis.animation_timing import AnimationConfig, frame_times, RunSeries
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np

@@ -2,124 +2,38 @@
 A run seen from above, animated: the robot with its wheels steering along the path.
 
 :func:`animate_run` writes a GIF (matplotlib's Pillow writer) or an MP4 (its ffmpeg writer,
-when available) of a :class:`RunSeries`; :func:`save_frame` writes one frame as a PNG. Each
-frame shows the reference path, the travelled path so far, the chassis outline and the four
-wheels at their steer angles (:mod:`nfmr_dlsmc.core.footprint`), P and the reference point,
-the time and the distance error, above a strip of the distance error over time. By default
-the view follows the robot with a window a few metres wide, the whole path faint behind.
-The figure is built once; each frame only moves its artists.
+when available) of a :class:`~nfmr_dlsmc.analysis.animation_timing.RunSeries`, played as
+its :class:`~nfmr_dlsmc.analysis.animation_timing.AnimationConfig` says; :func:`save_frame`
+writes one frame as a PNG. Each frame shows the reference path, the travelled path so far,
+the chassis outline and the four wheels at their steer angles
+(:mod:`nfmr_dlsmc.core.footprint`), P and the reference point, the time and the distance
+error, above a strip of the distance error over time. By default the view follows the robot
+with a window a few metres wide, the whole path faint behind. The figure is built once;
+each frame only moves its artists. This is the module that needs matplotlib and Pillow (the
+``plots`` extra).
 """
 
-from dataclasses import dataclass, fields
-import math
-from numbers import Integral
 from pathlib import Path
 
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter, writers
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 from matplotlib.ticker import NullFormatter
+from nfmr_dlsmc.analysis.animation_timing import AnimationConfig, frame_times, RunSeries
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.footprint import chassis_corners, Footprint, wheel_corners
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
-from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
+from nfmr_dlsmc.core.validation import check_finite, ParameterError
 from nfmr_dlsmc.plants.kinematic import SimResult
 import numpy as np
 from PIL import Image
 
-__all__ = ['AnimationConfig', 'AnimationError', 'RunSeries', 'animate_run',
-           'check_animation_path', 'frame_times', 'save_frame', 'series_from_sim']
+__all__ = ['AnimationError', 'animate_run', 'check_animation_path', 'save_frame',
+           'series_from_sim']
 
 
 class AnimationError(NfmrError, RuntimeError):
     """An animation this machine cannot write; the message names the missing writer."""
-
-
-@dataclass(frozen=True)
-class RunSeries:
-    """
-    What an animation of one run draws, one entry per sample.
-
-    Attributes
-    ----------
-    t : ndarray (N,)
-        Time [s], strictly increasing, N >= 2.
-    x, y, theta : ndarray (N,)
-        Pose of the tracked point P [m, m, rad].
-    x_d, y_d : ndarray (N,)
-        Reference point [m].
-    steer : ndarray (N, 4)
-        Steer angles [rad], front-left, front-right, rear-left, rear-right.
-    distance_error : ndarray (N,)
-        Distance from P to the reference point [m].
-
-    """
-
-    t: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    theta: np.ndarray
-    x_d: np.ndarray
-    y_d: np.ndarray
-    steer: np.ndarray
-    distance_error: np.ndarray
-
-    def __post_init__(self):
-        t = np.array(self.t, dtype=float)
-        if t.ndim != 1 or t.size < 2:
-            raise ParameterError('series.t', f'shape {t.shape}', 'must hold N >= 2 samples')
-        n = t.size
-        for field in fields(self):
-            value = np.array(getattr(self, field.name), dtype=float)
-            shape = (n, 4) if field.name == 'steer' else (n,)
-            if value.shape != shape:
-                raise ParameterError(f'series.{field.name}', f'shape {value.shape}',
-                                     f'must have shape {shape}, one entry per sample of t')
-            if not np.all(np.isfinite(value)):
-                raise ParameterError(f'series.{field.name}', 'a non-finite value',
-                                     'must be finite')
-            value.flags.writeable = False
-            object.__setattr__(self, field.name, value)
-        if not np.all(np.diff(self.t) > 0.0):
-            raise ParameterError('series.t', 'a repeated or decreasing time',
-                                 'must be strictly increasing', 's')
-
-
-@dataclass(frozen=True)
-class AnimationConfig:
-    """
-    How an animation plays and looks.
-
-    Attributes
-    ----------
-    speed : float
-        Playback speed, a multiple of real time (4: a 100 s run plays in 25 s).
-    fps : float
-        Frames per second of the output [1/s]; a frame every ``speed / fps`` seconds of
-        the run.
-    view_width_m : float or None
-        Width of the window that follows the robot [m]; None fits the whole path.
-    width_px, height_px : int
-        Size of each frame [px].
-
-    """
-
-    speed: float = 4.0
-    fps: float = 10.0
-    view_width_m: float | None = 5.0
-    width_px: int = 640
-    height_px: int = 480
-
-    def __post_init__(self):
-        check_positive('animation.speed', self.speed)
-        check_positive('animation.fps', self.fps, '1/s')
-        if self.view_width_m is not None:
-            check_positive('animation.view_width_m', self.view_width_m, 'm')
-        for name in ('width_px', 'height_px'):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, Integral) or value < 100:
-                raise ParameterError(f'animation.{name}', value, 'must be an integer >= 100',
-                                     'px')
 
 
 def series_from_sim(run: SimResult, geometry: RobotGeometry = RobotGeometry(),
@@ -137,13 +51,6 @@ def series_from_sim(run: SimResult, geometry: RobotGeometry = RobotGeometry(),
     x_d, y_d = run.reference[:, 0], run.reference[:, 1]
     return RunSeries(t=run.t, x=x, y=y, theta=theta, x_d=x_d, y_d=y_d, steer=steer,
                      distance_error=np.hypot(x - x_d, y - y_d))
-
-
-def frame_times(series: RunSeries, config: AnimationConfig = AnimationConfig()) -> np.ndarray:
-    """Return the run time [s] each frame shows: every ``speed / fps`` seconds from the start."""
-    step = config.speed / config.fps  # [s] of the run per frame
-    count = math.floor((series.t[-1] - series.t[0]) / step + 1e-9) + 1
-    return series.t[0] + step * np.arange(count)
 
 
 def _check_directory(name: str, out_path: Path) -> None:

@@ -2,7 +2,8 @@
 ``nfmr-analyze``: the paper's metrics of recorded runs, compared side by side.
 
 With ``--animate`` it also draws one run as a GIF or MP4
-(:func:`~nfmr_dlsmc.ros.bag_animation.animate_contents`).
+(:func:`~nfmr_dlsmc.ros.bag_animation.animate_contents`). ``--plots`` and ``--animate`` need
+the ``plots`` extra; the metrics do not.
 """
 
 import argparse
@@ -11,7 +12,7 @@ from pathlib import Path
 import sys
 import time
 
-from nfmr_dlsmc.analysis.animation import AnimationConfig, check_animation_path
+from nfmr_dlsmc.analysis.animation_timing import AnimationConfig
 from nfmr_dlsmc.analysis.run_metrics import (
     last_segment,
     metrics_table,
@@ -44,6 +45,7 @@ from nfmr_dlsmc.ros.run_series import (
     STATE_TOPIC,
     steer_joint_rates,
 )
+from nfmr_dlsmc.runtime.extras import require
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -92,10 +94,14 @@ def _run(args) -> int:
     if args.animate is None and (args.animate_speed, args.animate_fps) != (None, None):
         raise UsageError('--animate-speed and --animate-fps need --animate')
     if args.plots:
+        require('--plots', 'plots')
         check_writable(args.plots, '--plots', directory=True)
     if args.animate is not None:
         if len(args.bags) != 1:
             raise UsageError(f'--animate draws one bag; got {len(args.bags)}')
+        require('--animate', 'plots')
+        from nfmr_dlsmc.analysis.animation import check_animation_path
+
         check_writable(args.animate, '--animate')
         check_animation_path(args.animate)
     started = time.monotonic()

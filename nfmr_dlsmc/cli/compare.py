@@ -8,7 +8,7 @@ are on the kinematic model (3) or the pybullet chassis
 follows that path instead, from its start to its end, and the report holds how each held
 it and arrived. On a Dask cluster whose scheduler goes away, ``results.json`` holds the runs
 that had ended, marked partial (``"complete": false``), and the command ends with exit
-status 1.
+status 1. The figures need the ``plots`` extra.
 """
 
 import argparse
@@ -44,6 +44,7 @@ from nfmr_dlsmc.cli.common import (
     workers,
 )
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.runtime.extras import require
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file, path_file, path_values
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.worker_pool import SchedulerLost
@@ -92,6 +93,7 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
+    require("drawing the report's figures", 'plots')  # before the runs
     from nfmr_dlsmc.analysis.comparison_figures import write_figures, write_path_figure
     from nfmr_dlsmc.analysis.comparison_report import write_path_report, write_report
 

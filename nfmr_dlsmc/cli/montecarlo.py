@@ -56,6 +56,7 @@ from nfmr_dlsmc.cli.common import (
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.runtime.extras import require
 from nfmr_dlsmc.runtime.params import (
     controller_params,
     load_params_file,
@@ -182,6 +183,7 @@ def _run(args) -> int:
                                 PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
     check_memory(args.n * BATCH_ROBOT_BYTES, f'--n {args.n} starts')
     if args.plots:
+        require('--plots', 'plots')
         check_writable(args.plots, '--plots', directory=True)
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '

@@ -1,7 +1,8 @@
 """
 ``nfmr-run``: the simulated robot and the DLSMC as two ROS 2 processes, recorded to MCAP.
 
-The run itself is :mod:`nfmr_dlsmc.ros.launcher`'s.
+The run itself is :mod:`nfmr_dlsmc.ros.launcher`'s. Without the ``plots`` extra it runs,
+records and reports all the same, without the plots; ``--animate`` needs it.
 """
 
 import argparse
@@ -20,6 +21,7 @@ from nfmr_dlsmc.cli.common import (
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.ros.launcher import run, RunOptions
+from nfmr_dlsmc.runtime.extras import require
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -81,6 +83,8 @@ def _run(args) -> int:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:
         raise UsageError('--animate draws the run from its bag: drop --no-record')
+    if args.animate:
+        require('--animate', 'plots')
     check_ros_log_folder()
     check_writable(args.out, '--out', directory=True)
     return run(RunOptions(**vars(args)))

@@ -4,7 +4,8 @@
 Without ``--plant`` (or ``--plant kinematic``): search the outer-loop gains for the
 fastest return, under the same limits (:mod:`nfmr_dlsmc.analysis.outer_tuning`). With
 ``--plant pybullet``: an Optuna study over the robot profile's gains and options on the
-chassis and sensing of a parameter file (:mod:`nfmr_dlsmc.analysis.chassis_tuning`).
+chassis and sensing of a parameter file (:mod:`nfmr_dlsmc.analysis.chassis_tuning`; the
+``tune`` and ``plots`` extras).
 """
 
 import argparse
@@ -14,20 +15,6 @@ from pathlib import Path
 import sys
 
 from nfmr_dlsmc.analysis.chassis_search_space import parse_range, search_space
-from nfmr_dlsmc.analysis.chassis_tuning import (
-    load_tuning,
-    make_scenarios,
-    open_study,
-    run_study,
-    study_report,
-    TuningSetup,
-)
-from nfmr_dlsmc.analysis.chassis_tuning_report import (
-    format_report,
-    plot_history,
-    plot_importances,
-    write_tuned_params,
-)
 from nfmr_dlsmc.analysis.outer_tuning import (
     format_tuning,
     RATIOS,
@@ -53,6 +40,7 @@ from nfmr_dlsmc.cli.common import (
     workers,
 )
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.runtime.extras import require
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 from nfmr_dlsmc.runtime.share import shipped_config
 
@@ -191,6 +179,23 @@ def _tune_kinematic(args) -> int:
 
 
 def _tune_on_chassis(args) -> int:
+    # The study is Optuna's, in an SQLAlchemy storage; its history is drawn.
+    require('--plant pybullet', 'tune', 'plots')
+    from nfmr_dlsmc.analysis.chassis_tuning import (
+        load_tuning,
+        make_scenarios,
+        open_study,
+        run_study,
+        study_report,
+        TuningSetup,
+    )
+    from nfmr_dlsmc.analysis.chassis_tuning_report import (
+        format_report,
+        plot_history,
+        plot_importances,
+        write_tuned_params,
+    )
+
     space = search_space(parse_range(text) for text in args.range)
     setup = TuningSetup(
         Path(args.params) if args.params else shipped_config('robot_case1.yaml'),

@@ -4,13 +4,15 @@ The animation of a recorded run: its bag decoded here, put on one time and drawn
 :func:`animate_bag` draws the robot from above as it was recorded: P's true pose, its
 measured steer angles and the reference point (:mod:`nfmr_dlsmc.ros.animation_tracks`), on
 the times of :mod:`nfmr_dlsmc.analysis.animation_timing`, drawn by
-:mod:`nfmr_dlsmc.analysis.animation`. Both import matplotlib, which the ROS layer loads
-only to draw (doc/design.md, Architecture): each function here imports them when called.
+:mod:`nfmr_dlsmc.analysis.animation`. The drawing imports matplotlib, which the ROS layer
+loads only to draw (doc/design.md, Architecture; the ``plots`` extra): each function here
+imports it when called.
 """
 
 from pathlib import Path
 import time
 
+from nfmr_dlsmc.analysis.animation_timing import aligned_series, AnimationConfig
 from nfmr_dlsmc.bag.reader import BagContents, BagError, read_bag
 from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.steering import RobotGeometry
@@ -55,9 +57,6 @@ def animation_series(contents: BagContents, config=None, series: dict | None = N
         A topic is missing or the three share no time span.
 
     """
-    from nfmr_dlsmc.analysis.animation import AnimationConfig
-    from nfmr_dlsmc.analysis.animation_timing import aligned_series
-
     state = state_series(contents)[0] if series is None else series
     reference = state_track(contents, state)
     topic, *pose = pose_track(contents)
@@ -77,7 +76,7 @@ def animate_contents(contents: BagContents, out: Path, config=None,
     ``series`` is the bag's :func:`~nfmr_dlsmc.ros.run_series.state_series` if already
     read; ``progress`` is passed to :func:`~nfmr_dlsmc.analysis.animation.animate_run`.
     """
-    from nfmr_dlsmc.analysis.animation import animate_run, AnimationConfig, check_animation_path
+    from nfmr_dlsmc.analysis.animation import animate_run, check_animation_path
 
     started = time.monotonic()
     config = AnimationConfig() if config is None else config

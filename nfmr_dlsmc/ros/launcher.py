@@ -7,7 +7,7 @@ lifecycle services, and deactivates it (zero speed) when the run is over. It rec
 topic of the run into a rosbag2 MCAP bag (in this process), shows progress, and at the end
 prints the paper's metrics and those of holding the path next to the same scenario run in
 this process on the pybullet chassis (no ROS) and on the kinematic model, and writes
-plots. The last line printed is the bag directory. The command line is
+plots (with the ``plots`` extra). The last line printed is the bag directory. The command line is
 :mod:`nfmr_dlsmc.cli.run`.
 
 This module orders the run. The children are started and stopped by

@@ -3,8 +3,9 @@ The end of ``nfmr-run``: its metrics table, plots, timing and animation.
 
 Once the nodes have stopped and the bag is closed, :func:`report_run` reads the bag back,
 measures the run next to the same scenario run in this process on the pybullet chassis
-(no ROS) and on the kinematic model, prints the table, writes the plots, prints and writes
-the timing and, if asked, the animation. A run that was not recorded reports its timing
+(no ROS) and on the kinematic model, prints the table, writes the plots (without the
+``plots`` extra, says once why it does not), prints and writes the timing and, if asked,
+the animation. A run that was not recorded reports its timing
 only (:func:`report_timing`); the figures are counters, the sim's from ``/diagnostics``.
 """
 
@@ -39,6 +40,7 @@ from nfmr_dlsmc.ros.run_series import (
     STATE_TOPIC,
     steer_joint_rates,
 )
+from nfmr_dlsmc.runtime.extras import missing
 from nfmr_dlsmc.runtime.params import ControllerParams
 
 
@@ -46,6 +48,9 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
                counts: dict, real_time_factor: float) -> None:
     """
     Print the metrics table and the run's timing, and write the plots (and animation).
+
+    Without the ``plots`` extra, one note on stderr says the plots were not drawn and how
+    to install it; the rest is the same.
 
     The table holds the ROS run and, unless ``options.no_compare``, the same scenario on
     the in-process pybullet plant and the kinematic model.
@@ -92,11 +97,16 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
             if sim.steer is not None:
                 plotted.update(zip(STEER_FIELDS, sim.steer.T))
             runs.append((label, plotted))
-    plot_runs(runs, run_dir)
+    lacking = missing('plots')
+    if lacking:
+        print(f'nfmr-run: note: no plots: drawing them needs {lacking}', file=sys.stderr)
+    else:
+        plot_runs(runs, run_dir)
     print(metrics_table(columns))
     stopped = int(series['stopped'].sum())
     print(f"{len(series['t'])} control ticks ({stopped} stopped by safety); "
-          f'{sum(counts.values())} messages recorded; plots in {run_dir}')
+          f'{sum(counts.values())} messages recorded'
+          + ('' if lacking else f'; plots in {run_dir}'))
     report_timing(run_timing(real_time_factor, loop_figures(loop_windows(contents)),
                              sim_stepping(contents)),
                   run_dir)

@@ -5,10 +5,11 @@ On this machine, a process pool of ``--jobs`` workers that stop at once on Ctrl-
 SIGTERM instead of finishing every queued run first, and die with the command when it is
 killed outright. With ``--scheduler ADDRESS``, the workers of a Dask distributed cluster
 (``dask scheduler`` and ``dask worker ADDRESS`` on any number of machines, each with this
-package installed): Dask hands the runs out, and runs a worker held when it left again on
-the others (doc/design.md, D22). :func:`finished` yields the runs as they end, here or
-there; on a cluster it also says when no worker is left, and raises
-:class:`SchedulerLost` when the scheduler goes away, after the runs that ended before it.
+package and its ``cluster`` extra installed): Dask hands the runs out, and runs a worker
+held when it left again on the others (doc/design.md, D22). :func:`finished` yields the
+runs as they end, here or there; on a cluster it also says when no worker is left, and
+raises :class:`SchedulerLost` when the scheduler goes away, after the runs that ended
+before it.
 """
 
 from concurrent.futures import as_completed, FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -19,6 +20,7 @@ import signal
 import sys
 
 from nfmr_dlsmc.core.errors import NfmrError
+from nfmr_dlsmc.runtime.extras import require
 from nfmr_dlsmc.runtime.parent_death import die_with_parent
 
 __all__ = ['Cluster', 'ClusterError', 'finished', 'SchedulerLost', 'worker_pool']
@@ -87,6 +89,8 @@ class Cluster:
     ClusterError
         On entering: the scheduler does not answer within :data:`CONNECT_TIMEOUT`, or it
         has no worker.
+    MissingExtra
+        On entering: Dask's ``distributed`` is not installed (the ``cluster`` extra).
 
     """
 
@@ -99,7 +103,8 @@ class Cluster:
         self._waiting_said = False
 
     def __enter__(self):
-        # Only a command given --scheduler needs Dask.
+        # Only a command given --scheduler needs Dask: the [cluster] extra.
+        require('--scheduler', 'cluster')
         from distributed import Client
         from distributed.comm.addressing import parse_address, parse_host_port
 
