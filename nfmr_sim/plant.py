@@ -37,7 +37,7 @@ import numpy as np
 def simulate_pybullet(session: TrackingSession, x0, duration: float,
                       world_config: WorldConfig | None = None,
                       disturbance: YawRateDisturbance | None = None,
-                      progress=None) -> SimResult:
+                      progress=None, observer=None) -> SimResult:
     """
     Run ``session`` against the pybullet chassis from pose ``x0`` of P.
 
@@ -68,6 +68,10 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         Yaw-rate pulses added to the commanded omega before the mapping.
     progress : callable, optional
         Called as ``progress(t)`` about once per simulated second.
+    observer : callable, optional
+        Called as ``observer(out)`` with the world's
+        :class:`~nfmr_sim.world.StepOutput` after every physics step (joint states, ground
+        truth), e.g. to compute wheel odometry from the encoders.
 
     Returns
     -------
@@ -135,6 +139,8 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
             joint_rates[k] = out.joint_velocity[:4]
             world.set_wheel_commands(steer, wheels)
             out = world.step()
+            if observer is not None:
+                observer(out)
             if progress is not None and (k + 1) % every == 0:
                 progress(out.time)
         final = out.point_p

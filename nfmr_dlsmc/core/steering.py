@@ -30,8 +30,8 @@ import numpy as np
 
 __all__ = ['NEAR_CRAB_J1', 'RobotGeometry', 'SteerMode', 'WHEEL_NAMES', 'WheelCommands',
            'centre_twist', 'front_steer_from_yaw_rate', 'geometry_mismatch',
-           'steer_angle_series', 'unicycle_from_wheels', 'wheel_commands',
-           'wheel_commands_for_twist', 'yaw_rate_from_front_steer']
+           'steer_angle_series', 'twist_from_wheels', 'unicycle_from_wheels',
+           'wheel_commands', 'wheel_commands_for_twist', 'yaw_rate_from_front_steer']
 
 #: Wheel order of every per-wheel array.
 WHEEL_NAMES = ('front_left', 'front_right', 'rear_left', 'rear_right')
@@ -269,8 +269,8 @@ def steer_angle_series(v, omega, geometry: RobotGeometry, mode: SteerMode) -> np
     return np.clip(filled, -geometry.steer_limit, geometry.steer_limit)
 
 
-def _twist_from_wheels(steer, wheel_speed,
-                       geometry: RobotGeometry) -> tuple[float, float, float, float]:
+def twist_from_wheels(steer, wheel_speed,
+                      geometry: RobotGeometry) -> tuple[float, float, float, float]:
     """
     Return the least-squares twist (vx, vy, omega) of the centre from measured wheel states.
 
@@ -309,6 +309,6 @@ def unicycle_from_wheels(steer, wheel_speed, geometry: RobotGeometry,
     The inverse of :func:`wheel_commands`: v is the forward speed of P and the lateral
     velocity of P is ~0 whenever the wheels follow the mode's geometry.
     """
-    vx, vy, omega, _ = _twist_from_wheels(steer, wheel_speed, geometry)
+    vx, vy, omega, _ = twist_from_wheels(steer, wheel_speed, geometry)
     lateral = vy + omega * mode.zero_slip_offset(geometry.wheelbase)
     return vx, omega, lateral
