@@ -22,6 +22,7 @@ $(STAMP): setup.py setup.cfg package.xml
 	mkdir -p $(PKG_LIB) $(PKG_SHARE) $(INDEX)
 	ln -sf ../../bin/nfmr-controller $(PKG_LIB)/controller
 	ln -sf ../../bin/nfmr-sim $(PKG_LIB)/sim
+	ln -sf ../../bin/nfmr-wheel-odometry $(PKG_LIB)/wheel_odometry
 	cp resource/nfmr_dlsmc $(INDEX)/nfmr_dlsmc
 	# Relative links: the clone may move; `source .venv/bin/activate` sets AMENT_PREFIX_PATH
 	# as a ROS install's setup script does.

@@ -8,7 +8,8 @@ package_name = 'nfmr_dlsmc'
 # The nodes' console scripts carry the package's prefix in a shared bin/; in the package's
 # own lib/<package>/ (where colcon installs them and `ros2 run` looks), the short names
 # `ros2 run nfmr_dlsmc controller` and `... sim` stay, as links to the prefixed scripts.
-node_scripts = {'controller': 'nfmr-controller', 'sim': 'nfmr-sim'}
+node_scripts = {'controller': 'nfmr-controller', 'sim': 'nfmr-sim',
+                'wheel_odometry': 'nfmr-wheel-odometry'}
 
 
 class InstallScripts(install_scripts):
@@ -102,6 +103,7 @@ setup(
             'nfmr-tune-baselines = nfmr_dlsmc.cli.entry:tune_baselines',
             'nfmr-compare = nfmr_dlsmc.cli.entry:compare',
             'nfmr-publish-path = nfmr_dlsmc.cli.entry:publish_path',
+            'nfmr-wheel-odometry = nfmr_dlsmc.ros.wheel_odometry_node:main',
         ],
         # nfmr_sim's pybullet chassis as a plant of nfmr-eval, -montecarlo, -compare, -run.
         'nfmr_dlsmc.plants': ['pybullet = nfmr_sim.plant:PYBULLET'],

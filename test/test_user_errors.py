@@ -66,6 +66,9 @@ CASES = [
                                          '    motors: {drive_gear_ratio: 0.0}\n'))],
      'motors.drive_gear_ratio = 0.0: must be > 0'),
     ('nfmr-sim', lambda d: ['--ros-args', '-p', 'mode:=fast'], "mode = 'fast'"),
+    ('nfmr-wheel-odometry',
+     lambda d: ['--ros-args', '-p', 'joints.rear_left_drive:=front_left_steer'],
+     "joints.* = 'front_left_steer': must name eight different joints"),
     # Numbers out of range: refused before any work, not deep in a worker.
     ('nfmr-compare', lambda d: ['--duration', '0.0004', '--controllers', 'pid', '--out',
                                 str(d / 'r')], 'shorter than 10 control periods'),
@@ -110,7 +113,7 @@ def test_every_console_script_is_covered():
     scripts = {e.name for e in entry_points(group='console_scripts')
                if e.value.startswith(('nfmr_dlsmc.', 'nfmr_sim.'))}
     assert scripts == {name for name, _, _ in CASES}  # every one at least once
-    assert len(scripts) == 13  # eleven nfmr-* commands and the two nodes
+    assert len(scripts) == 14  # eleven nfmr-* commands and the three nodes
 
 
 @pytest.mark.parametrize('name, arguments, needle', CASES,
@@ -122,8 +125,11 @@ def test_a_user_error_is_one_line_and_exit_2(tmp_path, name, arguments, needle):
     assert proc.returncode == 2, proc.stderr
     lines = _ours(proc.stderr)
     assert len(lines) == 1, proc.stderr
-    # A node's errors carry its node name (controller, sim), as its log lines do.
-    prog = name.removeprefix('nfmr-') if name in ('nfmr-controller', 'nfmr-sim') else name
+    # A node's errors carry its node name (controller, sim, wheel_odometry), as its log
+    # lines do.
+    nodes = {'nfmr-controller': 'controller', 'nfmr-sim': 'sim',
+             'nfmr-wheel-odometry': 'wheel_odometry'}
+    prog = nodes.get(name, name)
     assert lines[0].startswith(f'{prog}: error: '), lines[0]
     assert needle.format(d=tmp_path) in lines[0]
 

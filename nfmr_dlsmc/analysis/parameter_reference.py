@@ -1,5 +1,5 @@
 """
-The parameter reference of both nodes, ``doc/parameters.md``, generated from the schema.
+The parameter reference of the nodes, ``doc/parameters.md``, generated from the schema.
 
 ``python -m nfmr_dlsmc.analysis.parameter_reference doc/parameters.md`` (``make docs``)
 writes it; ``test/test_parameter_schema.py`` fails while the file in the tree differs from
@@ -12,6 +12,7 @@ import sys
 
 from nfmr_dlsmc.core.schema import markdown_table
 from nfmr_dlsmc.plants.registry import robot_plant
+from nfmr_dlsmc.runtime.joint_states import wheel_odometry_parameters
 from nfmr_dlsmc.runtime.params import controller_parameters
 
 __all__ = ['render']
@@ -22,19 +23,20 @@ _HEADER = """\
 Generated from the schema by `make docs`; do not edit by hand. Each parameter is declared
 once, in the schema of its config class
 ([`nfmr_dlsmc/core/schema.py`](../nfmr_dlsmc/core/schema.py)): the nodes' declarations and
-descriptors, the validation, the live-set rules and these tables derive from it.
-`ros2 param describe /controller <name>` (or `/sim`) gives the same description, unit and
-rule, and a numeric range for a rule that is an interval (`> 0` is shown as 0 to inf, whose
-end 0 the rule still refuses), as rqt_reconfigure shows it. Integers are accepted for
-floating-point parameters. A parameter marked live can be changed while the node runs
-(`ros2 param set`): the change is validated like a parameter file and applied at the next
-tick or physics step, or refused with the reason; the others
-are read-only. What the nodes do with them: [nodes.md](nodes.md).
+descriptors, the validation, the live-set rules and these tables derive from it. `ros2
+param describe /controller <name>` (or `/sim`, `/wheel_odometry`) gives the same
+description, unit and rule, and a numeric range for a rule that is an interval (`> 0` is
+shown as 0 to inf, whose end 0 the rule still refuses), as rqt_reconfigure shows it.
+Integers are accepted for floating-point parameters. A parameter marked live can be changed
+while the node runs (`ros2 param set`): the change is validated like a parameter file and
+applied at the next tick or physics step, or refused with the reason; the others are
+read-only. What the nodes do with them: [nodes.md](nodes.md).
 """
 
 _SECTIONS = (
     ('`controller`: the DLSMC node', controller_parameters),
     ('`sim`: the simulated robot', lambda: robot_plant('pybullet').node_parameters()),
+    ('`wheel_odometry`: odometry from the wheel encoders', wheel_odometry_parameters),
 )
 
 
