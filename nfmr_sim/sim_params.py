@@ -36,6 +36,7 @@ from nfmr_sim.urdf import ChassisConfig
 from nfmr_sim.world_config import (
     DisturbanceConfig,
     FrictionConfig,
+    LocalizationConfig,
     MotorConfig,
     WorldConfig,
 )
@@ -137,7 +138,7 @@ def sim_parameters() -> list[Param]:
     """Return every parameter of the sim node, in declaration order."""
     return [*params_of(SimSettings), *params_of(WorldConfig), *params_of(SteerMode),
             *params_of(ChassisConfig), *params_of(MotorConfig), *params_of(FrictionConfig),
-            *params_of(DisturbanceConfig)]
+            *params_of(DisturbanceConfig), *params_of(LocalizationConfig)]
 
 
 def sim_parameter_defaults() -> dict:
@@ -164,5 +165,6 @@ def sim_settings(flat: dict) -> SimSettings:
                       motors=from_flat(MotorConfig, flat),
                       friction=from_flat(FrictionConfig, flat),
                       disturbance=from_flat(DisturbanceConfig, flat),
+                      localization=from_flat(LocalizationConfig, flat),
                       steer_mode=from_flat(SteerMode, flat))
     return from_flat(SimSettings, flat, world=world)

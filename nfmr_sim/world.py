@@ -93,6 +93,29 @@ class OdometrySample:
 
 
 @dataclass(frozen=True)
+class FixSample:
+    """
+    One localisation fix of P: the absolute pose measured at ``time``, delivered later.
+
+    Attributes
+    ----------
+    time : float
+        When the pose was true [s] (the message stamp).
+    x, y, yaw : float
+        The pose as measured [m, m, rad]: noise on each, and an outlier's offset.
+    outlier : bool
+        Whether this fix is an outlier (what the simulation knows and a robot does not).
+
+    """
+
+    time: float
+    x: float
+    y: float
+    yaw: float
+    outlier: bool
+
+
+@dataclass(frozen=True)
 class StepOutput:
     """
     What one physics step produced.
@@ -114,6 +137,9 @@ class StepOutput:
         Indices of the force pulses acting during the step.
     drive_torque_saturated : bool
         Whether any drive joint applied its torque limit.
+    localization : FixSample or None
+        The localisation fix that arrives at this step (measured ``localization.latency``
+        earlier), or None.
 
     """
 
@@ -127,6 +153,7 @@ class StepOutput:
     wheel_normal_force: np.ndarray
     active_disturbances: tuple
     drive_torque_saturated: bool
+    localization: FixSample | None = None
 
 
 class ChassisWorld:
@@ -211,6 +238,8 @@ class ChassisWorld:
         self._rng = np.random.default_rng(cfg.disturbance.seed)
         self._odom_in_flight = collections.deque()  # OdometrySample, oldest first
         self._odom_bias = np.zeros(3)  # x [m], y [m], yaw [rad]
+        self._fix_rng = np.random.default_rng(cfg.localization.seed)
+        self._fix_in_flight = collections.deque()  # (step due, FixSample), oldest first
         self._apply_motors()
         self._measure_odometry(self._planar(cfg.tracked_point_offset)[0])
 
@@ -285,7 +314,11 @@ class ChassisWorld:
         self._drift_odometry_bias()
         if self._steps % cfg.odom_period_steps == 0:
             self._measure_odometry(out.point_p)
-        return replace(out, odometry=self._arriving_odometry())
+        fix_every = cfg.fix_period_steps
+        if fix_every is not None and self._steps % fix_every == 0:
+            self._measure_fix(out.point_p)
+        return replace(out, odometry=self._arriving_odometry(),
+                       localization=self._arriving_fix())
 
     def _apply_motors(self) -> None:
         c, m = self._client, self.config.motors
@@ -393,6 +426,28 @@ class ChassisWorld:
                                    truth.vx, truth.vy, truth.yaw_rate)
         self._odom_in_flight.append((self._steps + self.config.odom_latency_steps,
                                      OdometrySample(self._time, measured)))
+
+    def _measure_fix(self, truth: PlanarState) -> None:
+        """Take a localisation fix of P now: noise, sometimes an outlier; in flight."""
+        loc, rng = self.config.localization, self._fix_rng
+        nx, ny, nyaw = rng.normal(0.0, 1.0, 3) * (loc.position_noise, loc.position_noise,
+                                                  loc.yaw_noise)
+        outlier = bool(rng.random() < loc.outlier_fraction)
+        if outlier:
+            distance = rng.uniform(loc.outlier_min, loc.outlier_max)
+            direction = rng.uniform(-math.pi, math.pi)
+            nx += distance * math.cos(direction)
+            ny += distance * math.sin(direction)
+        fix = FixSample(self._time, truth.x + float(nx), truth.y + float(ny),
+                        math.remainder(truth.yaw + float(nyaw), 2 * math.pi), outlier)
+        self._fix_in_flight.append((self._steps + self.config.fix_latency_steps, fix))
+
+    def _arriving_fix(self) -> FixSample | None:
+        """Return the latest fix whose latency has passed at this step, if any."""
+        arrived = None
+        while self._fix_in_flight and self._fix_in_flight[0][0] <= self._steps:
+            arrived = self._fix_in_flight.popleft()[1]
+        return arrived
 
     def _arriving_odometry(self) -> OdometrySample | None:
         """Return the latest message whose latency has passed at this step, if any."""

@@ -12,6 +12,7 @@ from nfmr_dlsmc.core.schema import (
     param,
     POSITIVE,
     positive_up_to,
+    within,
 )
 from nfmr_dlsmc.core.steering import SteerMode
 from nfmr_dlsmc.core.validation import ParameterError
@@ -186,6 +187,47 @@ class DisturbanceConfig:
 
 @documented
 @dataclass(frozen=True)
+class LocalizationConfig:
+    """
+    An absolute fix of P, as a robot's localisation gives it (lidar, GNSS-RTK, markers).
+
+    Slow, late and noisy: the pose of P measured every ``rate`` of a second, delivered
+    ``latency`` later, with Gaussian noise; a share ``outlier_fraction`` of the fixes is off
+    by ``outlier_min`` to ``outlier_max`` in a random direction (a scan matched to the wrong
+    place). Its own seeded generator: a fix stream leaves the odometry's noise as it was.
+    """
+
+    prefix: ClassVar[str] = 'localization'
+
+    rate: float = param(0.0, 'Hz', 'fixes per second of simulated time, rounded to whole '
+                        'physics steps (0: none)', NON_NEGATIVE, read_only=True)
+    latency: float = param(0.0, 's', 'a fix arrives this long after the instant its pose was '
+                           'true (its stamp); rounded to whole physics steps', NON_NEGATIVE,
+                           read_only=True)
+    position_noise: float = param(0.0, 'm', 'standard deviation of Gaussian noise on the '
+                                  'position of a fix (x and y each)', NON_NEGATIVE,
+                                  read_only=True)
+    yaw_noise: float = param(0.0, 'rad', 'standard deviation of Gaussian noise on the yaw of '
+                             'a fix', NON_NEGATIVE, read_only=True)
+    outlier_fraction: float = param(0.0, '', 'share of the fixes that are outliers',
+                                    within(0.0, 1.0), read_only=True)
+    outlier_min: float = param(0.2, 'm', 'least distance of an outlier from the truth',
+                               NON_NEGATIVE, read_only=True)
+    outlier_max: float = param(0.5, 'm', 'largest distance of an outlier from the truth',
+                               NON_NEGATIVE, read_only=True, also='>= localization.outlier_min')
+    seed: int = param(1, '', "seed of the fixes' noise generator", at_least(0),
+                      read_only=True)
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.outlier_max < self.outlier_min:
+            raise ParameterError(f'{self.prefix}.outlier_max', self.outlier_max,
+                                 f'must be >= {self.prefix}.outlier_min = '
+                                 f'{self.outlier_min:g} m', 'm')
+
+
+@documented
+@dataclass(frozen=True)
 class WorldConfig:
     """
     Everything the simulated world is built from.
@@ -199,6 +241,7 @@ class WorldConfig:
     motors: MotorConfig = field(default_factory=MotorConfig)
     friction: FrictionConfig = field(default_factory=FrictionConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
+    localization: LocalizationConfig = field(default_factory=LocalizationConfig)
     steer_mode: SteerMode = field(default_factory=SteerMode)
     physics_dt: float = param(0.001, 's', 'physics step',
                               positive_up_to(0.01, '0.01', inclusive=True,
@@ -210,11 +253,26 @@ class WorldConfig:
         if rate * self.physics_dt > 1.0 + 1e-9:
             raise ParameterError('disturbance.odom_rate', rate, 'must not exceed the physics '
                                  f'rate 1 / physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
+        rate = self.localization.rate
+        if rate * self.physics_dt > 1.0 + 1e-9:
+            raise ParameterError('localization.rate', rate, 'must not exceed the physics '
+                                 f'rate 1 / physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
 
     @property
     def odom_period_steps(self) -> int:
         """Physics steps between two odometry measurements (at least 1)."""
         return max(1, round(1.0 / (self.disturbance.odom_rate * self.physics_dt)))
+
+    @property
+    def fix_period_steps(self) -> int | None:
+        """Physics steps between two localisation fixes (None: no fixes)."""
+        rate = self.localization.rate
+        return None if rate == 0.0 else max(1, round(1.0 / (rate * self.physics_dt)))
+
+    @property
+    def fix_latency_steps(self) -> int:
+        """Physics steps from a fix's measurement to its message."""
+        return round(self.localization.latency / self.physics_dt)
 
     @property
     def odom_latency_steps(self) -> int:

@@ -5,7 +5,7 @@ import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME, status_figures
@@ -41,12 +41,14 @@ class Driver(Node):
     def __init__(self, context):
         super().__init__('driver', context=context)
         self.odom, self.clock, self.joints, self.logs = [], [], [], []
-        self.truth, self.markers = [], []
+        self.truth, self.markers, self.fixes = [], [], []
         self.new_odom = threading.Condition()
         self.create_subscription(Odometry, 'odom', self._on_odom, DEEP_QOS)
         self.create_subscription(Clock, '/clock', self.clock.append, DEEP_QOS)
         self.create_subscription(JointState, 'joint_states', self.joints.append, DEEP_QOS)
         self.create_subscription(Odometry, 'ground_truth', self.truth.append, DEEP_QOS)
+        self.create_subscription(PoseWithCovarianceStamped, 'localization', self.fixes.append,
+                                 DEEP_QOS)
         self.create_subscription(MarkerArray, 'robot_markers', self.markers.append, QOS)
         self.create_subscription(Log, '/rosout', self._on_log, ROSOUT_QOS)
         self.stepping = []  # the sim's stepping counters from /diagnostics, by key
@@ -485,5 +487,26 @@ def test_odom_covariance_is_that_of_the_configured_noise_and_ground_truth_exact(
         wait_for(lambda: driver.odom[-1].pose.covariance[35] == 0.0)
         assert driver.odom[-1].pose.covariance.tolist() == _diagonal(
             0.05 ** 2, 0.05 ** 2, 1e6, 1e6, 1e6, 0.0).tolist()
+    finally:
+        stop(sim, driver, executor)
+
+
+def test_localization_fixes_come_at_their_rate_in_the_map_frame_with_their_covariance(
+        ros_context):
+    sim, driver, executor = start(ros_context, mode='realtime',
+                                  **{'localization.rate': 20.0, 'localization.latency': 0.05,
+                                     'localization.position_noise': 0.01,
+                                     'localization.yaw_noise': 0.02})
+    try:
+        wait_for(lambda: len(driver.fixes) >= 10 and len(driver.truth) >= 10)
+        assert not any(m.pose.covariance[0] for m in driver.odom)  # odometry as it was
+        stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in driver.fixes]
+        assert np.diff(stamps) == pytest.approx(0.05, abs=1e-9)  # every 50 ms of sim time
+        for msg in driver.fixes[:10]:
+            assert msg.header.frame_id == 'map'
+            assert msg.pose.covariance.tolist() == _diagonal(
+                0.01 ** 2, 0.01 ** 2, 1e6, 1e6, 1e6, 0.02 ** 2).tolist()
+            # Standing at the origin: each fix is the origin and its noise, a few cm at most.
+            assert abs(msg.pose.pose.position.x) < 0.06 and abs(msg.pose.pose.position.y) < 0.06
     finally:
         stop(sim, driver, executor)

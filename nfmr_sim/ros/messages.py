@@ -3,9 +3,10 @@
 from dataclasses import dataclass
 
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.runtime.odometry_wire import NS_PER_S, stamp_nanoseconds, yaw_quaternion
-from nfmr_sim.world import PlanarState
+from nfmr_sim.world import FixSample, PlanarState
 import numpy as np
 
 #: Variance [m^2 or rad^2, and per s^2 for the twist] of what planar odometry does not
@@ -95,4 +96,24 @@ def odometry_message(state: PlanarState, stamp: Time,
     msg.twist.twist.linear.y = state.vy
     msg.twist.twist.angular.z = state.yaw_rate
     msg.twist.covariance = covariance.twist
+    return msg
+
+
+def fix_message(fix: FixSample, position_noise: float, yaw_noise: float,
+                frame_id: str = 'map') -> PoseWithCovarianceStamped:
+    """
+    Convert a localisation fix of P to geometry_msgs/PoseWithCovarianceStamped.
+
+    Stamped when it was measured; its covariance says the fixes' noise (``position_noise``
+    [m], ``yaw_noise`` [rad]; not an outlier's offset, which a localisation does not know).
+    """
+    msg = PoseWithCovarianceStamped()
+    msg.header.stamp = time_message(fix.time)
+    msg.header.frame_id = frame_id
+    pose = msg.pose.pose
+    pose.position.x, pose.position.y = fix.x, fix.y
+    pose.orientation.z, pose.orientation.w = yaw_quaternion(fix.yaw)
+    msg.pose.covariance = _diagonal([position_noise ** 2, position_noise ** 2,
+                                     UNMEASURED_VARIANCE, UNMEASURED_VARIANCE,
+                                     UNMEASURED_VARIANCE, yaw_noise ** 2])
     return msg

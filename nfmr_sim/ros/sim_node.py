@@ -45,7 +45,7 @@ import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
 from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.validation import ParameterError
@@ -55,7 +55,12 @@ from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME
 from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
 from nfmr_sim.realtime_pacer import RealtimePacer
-from nfmr_sim.ros.messages import odometry_covariance, odometry_message, time_message
+from nfmr_sim.ros.messages import (
+    fix_message,
+    odometry_covariance,
+    odometry_message,
+    time_message,
+)
 from nfmr_sim.sim_params import sim_parameters, sim_settings
 from nfmr_sim.world import ChassisWorld, DRIVE_JOINTS, STEER_JOINTS
 from rcl_interfaces.msg import SetParametersResult
@@ -103,6 +108,8 @@ class SimNode(SchemaNode):
         self._odom_pub = self.create_publisher(Odometry, 'odom', reliable)
         self._truth_pub = self.create_publisher(Odometry, 'ground_truth', reliable)
         self._joint_pub = self.create_publisher(JointState, 'joint_states', reliable)
+        self._fix_pub = self.create_publisher(PoseWithCovarianceStamped, 'localization',
+                                              reliable)
         self._dist_pub = self.create_publisher(Bool, 'disturbance_active', reliable)
         self._marker_pub = self.create_publisher(
             MarkerArray, 'robot_markers',
@@ -377,6 +384,10 @@ class SimNode(SchemaNode):
         if out.odometry is not None:  # stamped when it was measured, latency ago
             self._odom_pub.publish(odometry_message(
                 out.odometry.state, time_message(out.odometry.time), self._odom_covariance))
+        if out.localization is not None:
+            loc = self.world.config.localization
+            self._fix_pub.publish(fix_message(out.localization, loc.position_noise,
+                                              loc.yaw_noise))
         # After the odometry: a controller ticking on /clock has the step's odometry first.
         self._clock_pub.publish(Clock(clock=stamp))
         every = self.settings.marker_every
