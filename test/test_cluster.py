@@ -252,6 +252,33 @@ def test_nfmr_compare_keeps_the_results_of_the_runs_a_killed_scheduler_finished(
 
 
 @pytest.mark.sim
+def test_a_matrix_whose_scheduler_is_killed_keeps_the_runs_that_finished(cluster, tmp_path):
+    out = tmp_path / 'matrix'
+    command = Background([str(BIN / 'nfmr-compare'), '--plant', 'pybullet', '--matrix',
+                          '--duration', '5', '--controllers', 'kanayama', '--out', str(out),
+                          '--scheduler', cluster.address])
+    _wait_for(lambda: re.search(r'\[  2/12\]', command.stderr), 300,
+              'two runs done on the cluster')
+    cluster.scheduler.kill()
+    status, _, stderr = command.finish(timeout=120)
+    assert status == 1, stderr[-2000:]
+    line = _lines(stderr)[-1]
+    found = re.fullmatch(
+        f'nfmr-compare: error: the Dask scheduler at {re.escape(cluster.address)} is gone '
+        r'\(the connection to it was lost\): (\d+) of 12 runs had finished; '
+        f'{re.escape(str(out))}/matrix.json holds those ' r'\1 \(partial, "complete": '
+        r'false; no table\)', line)
+    assert found, line
+    document = json.loads((out / 'matrix.json').read_text())
+    assert (document['complete'], document['runs_asked']) == (False, 12)
+    runs = [figures for cells in document['runs'].values() for laws in cells.values()
+            for figures in laws.values()]
+    assert 2 <= len(runs) == document['runs_finished'] == int(found[1]) < 12
+    assert document['laws'] == ['kanayama']
+    assert not (out / 'matrix.md').exists() and not (out / 'matrix.png').exists()
+
+
+@pytest.mark.sim
 def test_nfmr_tune_keeps_its_study_when_the_scheduler_is_killed(cluster, tmp_path):
     from test_chassis_tuning import narrow_flags, robot_file, SHORT
 

@@ -4,6 +4,8 @@ The numbers of the comparison report (Tables 2-4, section 4.2) from one simulate
 And the paper's published values beside which they are printed.
 """
 
+import math
+
 from nfmr_dlsmc.core.angles import wrap_angles
 from nfmr_dlsmc.core.metrics import (
     convergence_time,
@@ -82,6 +84,27 @@ def _attitude_band(t: np.ndarray, theta_e: np.ndarray, pulse_starts=()) -> float
     return float(values.max())
 
 
+def steer_joint_rate_p99(result, hold_from: float = HOLD_FROM,
+                         until: float = math.inf) -> float | None:
+    """
+    Return the 99th percentile of the fastest steer joint's rate over the hold [rad/s].
+
+    Each tick counts the largest abs of the four measured joint rates of the
+    :class:`~nfmr_dlsmc.plants.kinematic.SimResult`; the window is that of the hold figures
+    (t >= ``hold_from`` [s], before ``until``, a path's arrival). At or above a rate, it says
+    the joints ran that fast for at least 1 % of the hold, which the largest rate
+    (``hold_steer_joint_rate_max``) does not: a limit cycle, not one kick. None without
+    steer joints or without a tick in the window.
+    """
+    if result.steer_joint_velocity is None:
+        return None
+    after = (result.t >= hold_from) & (result.t < until)
+    if not np.any(after):
+        return None
+    fastest = np.max(np.abs(np.asarray(result.steer_joint_velocity, dtype=float)[after]), axis=1)
+    return finite_or_none(np.percentile(fastest, 99))
+
+
 def run_metrics(result, omega_max: float, pulse_starts=(), hold_from: float = HOLD_FROM,
                 goal=None) -> dict:
     """
@@ -101,7 +124,8 @@ def run_metrics(result, omega_max: float, pulse_starts=(), hold_from: float = HO
     half of the run) [rad/s^2]; and the :data:`HOLD_KEYS` of
     :func:`~nfmr_dlsmc.core.metrics.simulation_metrics` (``t_conv_1cm`` and the figures of
     holding the path from ``hold_from`` [s] on, steer figures where the result has steer
-    angles); with the ``goal`` pose of a path, also its :data:`ARRIVAL_KEYS`.
+    angles) with ``hold_steer_joint_rate_p99`` (:func:`steer_joint_rate_p99`); with the
+    ``goal`` pose of a path, also its :data:`ARRIVAL_KEYS`.
     """
     t, dt = result.t, result.dt
     telemetry = result.telemetry
@@ -143,6 +167,9 @@ def run_metrics(result, omega_max: float, pulse_starts=(), hold_from: float = HO
                        theta_e_settled_std=None)
     tracking = simulation_metrics(result, hold_from, goal).as_dict()
     metrics.update({key: tracking[key] for key in HOLD_KEYS})
+    ended = tracking['arrival_time']  # a path's: the hold window ends there
+    metrics['hold_steer_joint_rate_p99'] = steer_joint_rate_p99(
+        result, hold_from, math.inf if ended is None else ended)
     if goal is not None:
         metrics.update({key: tracking[key] for key in ARRIVAL_KEYS})
     for key in ('iae', 'ise', 'std', 'theta_r_iae', 'theta_r_ise', 'theta_r_std',

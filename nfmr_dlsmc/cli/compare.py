@@ -6,9 +6,12 @@ holding the path), the figures of section 4.2 as PNG files and ``results.json``;
 are on the kinematic model (3) or the pybullet chassis
 (:mod:`nfmr_dlsmc.analysis.comparison_runs`). With ``--path FILE`` every controller
 follows that path instead, from its start to its end, and the report holds how each held
-it and arrived. On a Dask cluster whose scheduler goes away, ``results.json`` holds the runs
-that had ended, marked partial (``"complete": false``), and the command ends with exit
-status 1. The figures need the ``plots`` extra.
+it and arrived. With ``--matrix`` (pybullet) it holds the steering and sensing matrix
+instead (:mod:`nfmr_dlsmc.analysis.comparison_matrix`): ``matrix.json``, ``matrix.md`` and
+``matrix.png``. On a Dask cluster whose scheduler goes away, ``results.json`` (with
+``--matrix``: ``matrix.json``) holds the runs that had ended, marked partial
+(``"complete": false``), and the command ends with exit status 1. The figures need the
+``plots`` extra.
 """
 
 import argparse
@@ -17,6 +20,13 @@ from pathlib import Path
 import sys
 import time
 
+from nfmr_dlsmc.analysis.comparison_matrix import (
+    matrix_document,
+    MATRIX_DURATION,
+    MATRIX_LAWS,
+    matrix_report,
+    matrix_tasks,
+)
 from nfmr_dlsmc.analysis.comparison_runs import (
     checked_gain_blocks,
     comparison_tasks,
@@ -81,8 +91,14 @@ def _parser() -> argparse.ArgumentParser:
                              'config/robot_case1.yaml)')
     parser.add_argument('--gains', type=Path, default=None,
                         help='comparison gains file (default config/comparison.yaml)')
-    parser.add_argument('--controllers', nargs='+', choices=CONTROLLER_NAMES,
-                        default=list(CONTROLLER_NAMES))
+    parser.add_argument('--controllers', nargs='+', choices=CONTROLLER_NAMES, default=None,
+                        help='the laws that run (default: every one, the DLSMC always; '
+                             f"with --matrix: {' '.join(MATRIX_LAWS)})")
+    parser.add_argument('--matrix', action='store_true',
+                        help='with --plant pybullet: Case 1 and the lemniscate for every '
+                             'steering preset and the sensing presets good and harsh '
+                             '(default 40 s each), the robot profile declaring the steering; '
+                             'writes matrix.json, matrix.md and matrix.png (doc/comparison.md)')
     add_workers(parser, 'runs')
     return parser
 
@@ -98,7 +114,10 @@ def _run(args) -> int:
     from nfmr_dlsmc.analysis.comparison_report import write_path_report, write_report
 
     gains_path = args.gains or shipped_config('comparison.yaml')
-    names = list(dict.fromkeys(['dlsmc', *args.controllers]))
+    if args.matrix:
+        _check_matrix(args)
+    names = (_matrix_laws(args) if args.matrix
+             else list(dict.fromkeys(['dlsmc', *(args.controllers or CONTROLLER_NAMES)])))
     blocks = checked_gain_blocks(gains_path, names)
     check_writable(args.out, '--out', directory=True)  # after the checks, before the runs
     if args.sensing is not None and args.plant != 'pybullet':
@@ -119,6 +138,10 @@ def _run(args) -> int:
             args.duration = round(reference.duration + PATH_MARGIN, 1)
         tasks = path_tasks(names, blocks, reference, params.arrival, args.duration,
                            args.plant, args.sensing, args.steering)
+    elif args.matrix:
+        if args.duration is None:
+            args.duration = MATRIX_DURATION
+        tasks = matrix_tasks(blocks, args.duration, names)
     else:
         if args.duration is None:
             args.duration = CASE1_LONGITUDINAL.duration
@@ -138,6 +161,8 @@ def _run(args) -> int:
         presets = [f'{preset} {what}' for preset, what in (
             (args.sensing, 'odometry'), (args.steering, 'steering')) if preset is not None]
         odometry = f" with {' and '.join(presets)}" if presets else ''
+        if args.matrix:
+            odometry = ' in every cell of the steering × sensing matrix'
         print(f'nfmr-compare: {len(tasks)} runs of {args.duration:g} s on the {args.plant} '
               f'plant{odometry}, {describe_workers(where)}, gains from {gains_path}',
               file=sys.stderr)
@@ -154,6 +179,9 @@ def _run(args) -> int:
     if cluster is not None:
         print(format_cluster_report(cluster), file=sys.stderr)
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.matrix:
+        return _write_matrix(args, metrics, names, gains_path, time.perf_counter() - begin,
+                             where)
     document = results_document(metrics, args.plant, args.sensing, args.steering)
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
     if reference is None:
@@ -177,10 +205,43 @@ def _write_partial(args, lost: SchedulerLost, asked: int) -> None:
     metrics = lost.partial[0]
     args.out.mkdir(parents=True, exist_ok=True)
     document = {'complete': False, 'runs_finished': len(metrics), 'runs_asked': asked,
-                **results_document(metrics, args.plant, args.sensing, args.steering)}
-    path = args.out / 'results.json'
+                **(matrix_document(metrics, _matrix_laws(args), args.duration) if args.matrix
+                   else results_document(metrics, args.plant, args.sensing, args.steering))}
+    path = args.out / ('matrix.json' if args.matrix else 'results.json')
     path.write_text(json.dumps(json_ready(document), indent=1))
-    lost.kept = f'{path} holds those {len(metrics)} (partial, "complete": false; no report)'
+    lost.kept = (f'{path} holds those {len(metrics)} (partial, "complete": false; no '
+                 f"{'table' if args.matrix else 'report'})")
+
+
+def _matrix_laws(args) -> list:
+    """Return the laws of ``--matrix``: those of ``--controllers``, else the matrix's four."""
+    return list(args.controllers or MATRIX_LAWS)
+
+
+def _check_matrix(args) -> None:
+    """Refuse, in one line, the options ``--matrix`` sets itself or that do not apply to it."""
+    if args.plant != 'pybullet':
+        raise UsageError('--matrix runs on the chassis: give --plant pybullet')
+    for option, value, why in (
+            ('--path', args.path, 'it runs Case 1 and the lemniscate'),
+            ('--sensing', args.sensing, 'it runs the sensing presets good and harsh'),
+            ('--steering', args.steering, 'it runs every steering preset')):
+        if value is not None:
+            raise UsageError(f'{option} does not apply to --matrix: {why}')
+
+
+def _write_matrix(args, metrics: dict, laws, gains, elapsed: float, where: str) -> int:
+    """Write matrix.json, matrix.md and matrix.png of the matrix's runs into ``--out``."""
+    from nfmr_dlsmc.analysis.matrix_figure import write_matrix_figure
+
+    document = matrix_document(metrics, laws, args.duration)
+    (args.out / 'matrix.json').write_text(json.dumps(json_ready(document), indent=1))
+    (args.out / 'matrix.md').write_text(matrix_report(document, gains, elapsed, where))
+    write_matrix_figure(args.out / 'matrix.png', document)
+    print(f"wrote {args.out / 'matrix.md'}, matrix.png and matrix.json in {elapsed:.1f} s",
+          file=sys.stderr)
+    print(args.out)
+    return 0
 
 
 if __name__ == '__main__':
