@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.nfmr-installed
 
-.PHONY: setup run test test-fast test-slow test-all bench report docs clean mutate
+.PHONY: setup run test test-fast test-slow test-all bench report results docs clean mutate
 
 setup: $(STAMP)
 
@@ -60,6 +60,14 @@ bench: setup
 
 report: setup
 	$(OWN) $(BIN)/nfmr-compare --out report
+
+# The measured figures the docs quote, each with the command that measured it (doc/results.md;
+# test_results_file.py fails on a quote that differs from it or a count of the tree gone
+# stale). A few minutes on one core; FIGURES='NAME ...' measures only those.
+FIGURES ?=
+
+results: setup
+	$(OWN) $(BIN)/python -m nfmr_dlsmc.analysis.results_file doc/results.md $(FIGURES)
 
 # The parameter reference, generated from the schema (test_parameter_schema.py checks it).
 docs: setup
