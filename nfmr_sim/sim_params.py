@@ -32,6 +32,7 @@ from nfmr_dlsmc.core.sensing import SENSING_KEYS, SENSING_PRESETS, with_sensing
 from nfmr_dlsmc.core.steering import SteerMode
 from nfmr_dlsmc.core.steering_presets import STEERING_KEYS, STEERING_PRESETS, with_steering
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_sim.encoders import EncoderConfig
 from nfmr_sim.urdf import ChassisConfig
 from nfmr_sim.world_config import (
     DisturbanceConfig,
@@ -50,6 +51,7 @@ class SimSettings:
     """Everything the sim node runs with: the world and how the node steps it."""
 
     world: WorldConfig = field(default_factory=WorldConfig)
+    encoders: EncoderConfig = field(default_factory=EncoderConfig)
     mode: str = param('lockstep', '', 'lockstep: each physics step waits for its command (or '
                       'lockstep_timeout); realtime: steps follow the wall clock, never '
                       'faster; a machine that cannot keep up slows the run down, no step is '
@@ -138,7 +140,8 @@ def sim_parameters() -> list[Param]:
     """Return every parameter of the sim node, in declaration order."""
     return [*params_of(SimSettings), *params_of(WorldConfig), *params_of(SteerMode),
             *params_of(ChassisConfig), *params_of(MotorConfig), *params_of(FrictionConfig),
-            *params_of(DisturbanceConfig), *params_of(LocalizationConfig)]
+            *params_of(DisturbanceConfig), *params_of(LocalizationConfig),
+            *params_of(EncoderConfig)]
 
 
 def sim_parameter_defaults() -> dict:
@@ -167,4 +170,4 @@ def sim_settings(flat: dict) -> SimSettings:
                       disturbance=from_flat(DisturbanceConfig, flat),
                       localization=from_flat(LocalizationConfig, flat),
                       steer_mode=from_flat(SteerMode, flat))
-    return from_flat(SimSettings, flat, world=world)
+    return from_flat(SimSettings, flat, world=world, encoders=from_flat(EncoderConfig, flat))

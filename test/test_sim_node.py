@@ -510,3 +510,19 @@ def test_localization_fixes_come_at_their_rate_in_the_map_frame_with_their_covar
             assert abs(msg.pose.pose.position.x) < 0.06 and abs(msg.pose.pose.position.y) < 0.06
     finally:
         stop(sim, driver, executor)
+
+
+def test_joint_states_come_at_the_encoder_rate_with_whole_drive_counts(ros_context):
+    sim, driver, executor = start(ros_context, mode='realtime',
+                                  **{'encoders.rate': 200.0,
+                                     'encoders.drive_counts_per_rev': 1024})
+    try:
+        wait_for(lambda: len(driver.joints) >= 20)
+        stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in driver.joints[:20]]
+        assert np.diff(stamps) == pytest.approx(0.005, abs=1e-9)  # every 5 ms of sim time
+        count = 2.0 * math.pi / 1024
+        for msg in driver.joints[:20]:
+            drives = np.array(msg.position[4:]) / count
+            assert np.allclose(drives, np.round(drives), atol=1e-9)
+    finally:
+        stop(sim, driver, executor)

@@ -4,8 +4,10 @@ ROS 2 node ``sim``: the pybullet chassis world behind topics.
 Publishes ``/clock`` every physics step and ``odom`` (pose and twist of P, ``odom`` ->
 ``base_link``) as the odometry model of the world delivers it: at ``disturbance.odom_rate``,
 ``disturbance.odom_latency`` after the instant it was measured, which is its stamp;
-``joint_states``, ``ground_truth`` (true odometry of P) and ``disturbance_active`` every
-``aux_publish_every`` steps; ``robot_markers`` (the chassis, the
+``ground_truth`` (true odometry of P) and ``disturbance_active`` every
+``aux_publish_every`` steps; ``joint_states`` as the encoders read them
+(:class:`~nfmr_sim.encoders.Encoders`: ``encoders.rate``, or with the other auxiliary
+topics, at their resolution); ``robot_markers`` (the chassis, the
 wheels at their measured steer angles and P, at the true pose:
 :func:`~nfmr_dlsmc.ros.scene.robot_markers`) ``marker_rate`` times per simulated second. The
 pose covariance of ``odom`` holds the variances of the configured odometry noise
@@ -54,6 +56,7 @@ from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
 from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME
 from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
+from nfmr_sim.encoders import Encoders
 from nfmr_sim.realtime_pacer import RealtimePacer
 from nfmr_sim.ros.messages import (
     fix_message,
@@ -108,6 +111,9 @@ class SimNode(SchemaNode):
         self._odom_pub = self.create_publisher(Odometry, 'odom', reliable)
         self._truth_pub = self.create_publisher(Odometry, 'ground_truth', reliable)
         self._joint_pub = self.create_publisher(JointState, 'joint_states', reliable)
+        self._encoders = Encoders(self.settings.encoders)
+        self._encoder_every = self.settings.encoders.period_steps(
+            world_cfg.physics_dt, self.settings.aux_publish_every)
         self._fix_pub = self.create_publisher(PoseWithCovarianceStamped, 'localization',
                                               reliable)
         self._dist_pub = self.create_publisher(Bool, 'disturbance_active', reliable)
@@ -172,6 +178,7 @@ class SimNode(SchemaNode):
         with self._control:
             self.world.reset((x, y, yaw), keep_time=True)
             self.gate = self._new_gate()
+            self._encoders = Encoders(self.settings.encoders)  # the joints start at 0 again
             now = self.world.time
         response.success = True
         response.message = (f'reset to initial_pose ({x:g} m, {y:g} m, {yaw:g} rad) at '
@@ -396,15 +403,17 @@ class SimNode(SchemaNode):
             self._marker_pub.publish(robot_markers(
                 stamp, self._footprint, chassis, (p.x, p.y, p.yaw), out.joint_position[:4],
                 p_offset_m=self.world.config.tracked_point_offset))
+        if self.steps % self._encoder_every == 0:
+            position, velocity = self._encoders.read(out.time, out.joint_position,
+                                                     out.joint_velocity)
+            joints = JointState(name=list(STEER_JOINTS + DRIVE_JOINTS),
+                                position=position.tolist(), velocity=velocity.tolist(),
+                                effort=out.joint_torque.tolist())
+            joints.header.stamp = stamp
+            self._joint_pub.publish(joints)
         if not aux:
             return
         self._truth_pub.publish(odometry_message(out.point_p, stamp))
-        joints = JointState(name=list(STEER_JOINTS + DRIVE_JOINTS),
-                            position=out.joint_position.tolist(),
-                            velocity=out.joint_velocity.tolist(),
-                            effort=out.joint_torque.tolist())
-        joints.header.stamp = stamp
-        self._joint_pub.publish(joints)
         self._dist_pub.publish(Bool(data=bool(out.active_disturbances)))
 
     def _publish_status(self) -> None:
