@@ -4,6 +4,7 @@ from dataclasses import FrozenInstanceError
 import math
 import pickle
 import timeit
+import warnings
 
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
@@ -661,3 +662,146 @@ def test_the_geometry_is_clamped_to_the_path_and_its_curvature_signed():
     assert traj.geometry(traj.length)[:3] == pytest.approx((4.0, 2.0, 0.0), abs=1e-9)
     assert traj.end_pose == pytest.approx((4.0, 2.0, 0.0), abs=1e-9)
     assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)
+
+
+# -- edges of the refusals, the sampling and the timing ---------------------------------------
+
+@pytest.mark.parametrize('points, profile, value', [
+    ([(0.0, 0.0), (1.0, 0.0), (math.nan, 1.0)], None, (math.nan, 1.0)),
+    ([(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (2.0, 4.0, 0.0)], None, (2.0, 4.0, 0.0)),
+    ([(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (1.0 + 1e-9, 2.0, 0.0)], PathProfile(v_max=1e300),
+     (1.0 + 1e-9, 2.0, 0.0)),
+])
+def test_a_refusal_keeps_the_point_it_names_as_its_value(points, profile, value):
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points, profile)
+    assert caught.value.index == 2
+    np.testing.assert_array_equal(caught.value.value, value)
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(caught.value)).value, value)
+
+
+@pytest.mark.parametrize('points', [AISLES, TIMED])
+def test_scalar_and_array_sampling_agree_exactly_at_the_first_and_last_instant(points):
+    traj = PathTrajectory.from_points(points)
+    for t in (float(traj.stamps[0]) if traj.stamps is not None else 0.0, traj.duration):
+        scalars = traj.sample(t) + traj.acceleration(t) + (traj.heading(t),)
+        grid = np.array([t])
+        arrays = traj.sample(grid) + traj.acceleration(grid) + (traj.heading(grid),)
+        np.testing.assert_array_equal(scalars, [a[0] for a in arrays])
+
+
+def test_before_the_start_it_moves_back_along_a_slanted_start_tangent():
+    # A straight path along (0.6, 0.8) started at 0.4 m/s: 2 s early it is 0.8 m back.
+    traj = PathTrajectory.from_points([(1.0, 2.0), (4.0, 6.0)],
+                                      PathProfile(speed=0.5, start_speed=0.4))
+    expected = (1.0 - 0.48, 2.0 - 0.64, 0.24, 0.32)
+    assert traj.sample(-2.0) == pytest.approx(expected, abs=1e-9)
+    np.testing.assert_allclose(np.ravel(traj.sample(np.array([-2.0]))), expected, atol=1e-9)
+
+
+@pytest.mark.parametrize('points', [AISLES, TIMED])
+def test_at_an_infinite_time_it_rests_at_the_first_or_last_point(points):
+    traj = PathTrajectory.from_points(points, PathProfile(corner_radius=0.0))
+    first, last = tuple(traj.points[0]), tuple(traj.points[-1])
+    t = np.array([-math.inf, -1e300, 1e300, math.inf])
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        assert traj.sample(-math.inf) == (*first, 0.0, 0.0)
+        assert traj.sample(math.inf)[2:] == (0.0, 0.0)
+        arrays = traj.sample(t) + traj.acceleration(t)
+    assert all(a.dtype == np.float64 for a in arrays)
+    x, y, xdot, ydot, xddot, yddot = arrays
+    np.testing.assert_allclose(np.c_[x, y], [first, first, last, last], atol=1e-9)
+    for value in (xdot, ydot, xddot, yddot):
+        np.testing.assert_array_equal(value, 0.0)
+
+
+def test_stamped_points_take_one_pose_integers_and_stamps_in_a_row_or_column():
+    # One pose: the path's own refusal, not an index error.
+    one = stamped_points([(1.0, 2.0)], [5.0])
+    np.testing.assert_array_equal(one, [(1.0, 2.0)])
+    with pytest.raises(PathError, match=r'1 distinct point\(s\) \(1 given'):
+        PathTrajectory.from_points(one)
+    same = stamped_points([(0, 0), (3, 4)], [7, 7])
+    assert same.dtype == np.float64
+    np.testing.assert_array_equal(same, [(0.0, 0.0), (3.0, 4.0)])
+    for stamps in ([[1.0, 2.0, 4.0]], [[1.0], [2.0], [4.0]]):
+        timed = stamped_points([(0.0, 0.0), (1.0, 0.0), (1.0, 2.0)], stamps)
+        np.testing.assert_array_equal(timed, [(0.0, 0.0, 0.0), (1.0, 1.0, 0.0),
+                                              (3.0, 1.0, 2.0)])
+
+
+def test_a_point_on_the_coordinate_bound_is_named_with_its_decimals():
+    with pytest.raises(PathError, match=r'point 1 at \(100000000\.00, 0\.00\) m: the path '
+                                        'turns back'):
+        PathTrajectory.from_points([(0.0, 0.0), (MAX_COORDINATE, 0.0), (0.0, 1.0)])
+
+
+def test_a_timed_path_with_a_huge_v_max_is_checked_without_a_warning():
+    # v_max * 10 s overflows to inf: no stamps ask for too much, and nothing is printed.
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        traj = PathTrajectory.from_points([(0.0, 0.0, 0.0), (10.0, 1.0, 0.0)],
+                                          PathProfile(v_max=1e308))
+    assert traj.duration == 10.0
+
+
+def test_a_gentle_bend_is_cut_as_much_as_a_right_angle_of_the_corner_radius():
+    # A 30 deg bend between two 10 m legs: the arc's radius is r (sqrt(2) - 1) / (1 /
+    # cos(15 deg) - 1) = 3.52 m, which cuts the corner by (sqrt(2) - 1) r = 0.124 m; the
+    # smoothing (a Gaussian 0.35 m wide) then takes some 0.35^2 / (2 * 3.52) = 0.018 m more.
+    radius = 0.3
+    turn = math.radians(30.0)
+    corner = np.array([10.0, 0.0])
+    traj = PathTrajectory.from_points([(0.0, 0.0), tuple(corner),
+                                       tuple(corner + 10.0 * np.array([math.cos(turn),
+                                                                       math.sin(turn)]))],
+                                      PathProfile(corner_radius=radius))
+    s, (x, y, _, kappa) = _dense(traj, 40001)
+    cut = np.hypot(x - corner[0], y - corner[1]).min()
+    assert (math.sqrt(2.0) - 1.0) * radius < cut < (math.sqrt(2.0) - 1.0) * radius + 0.025
+    arc = (math.sqrt(2.0) - 1.0) * radius / (1.0 / math.cos(turn / 2.0) - 1.0)
+    assert arc == pytest.approx(3.52, abs=0.01)
+    assert 1.0 / kappa.max() == pytest.approx(arc, rel=0.02)
+
+
+def test_a_long_path_with_short_end_legs_starts_and_ends_on_its_points():
+    # 10 km long: the smoothing is wider than the 1 m first and last legs.
+    points = [(0.0, 0.0), (1.0, 0.0), (1.0, 10000.0), (2.0, 10000.0)]
+    traj = PathTrajectory.from_points(points)
+    assert traj.geometry(0.0)[:2] == pytest.approx(points[0], abs=1e-6)
+    assert traj.geometry(traj.length)[:2] == pytest.approx(points[-1], abs=1e-6)
+    assert traj.start_pose[:2] == pytest.approx(points[0], abs=1e-6)
+    assert traj.end_pose[:2] == pytest.approx(points[-1], abs=1e-6)
+
+
+def test_without_corner_radius_the_spline_has_natural_ends():
+    # A natural spline is straight at its ends: the curvature rises linearly from 0 there,
+    # so 2 cm in it is about a fifth of what it is 10 cm in.
+    traj = PathTrajectory.from_points([(0.0, 0.0), (1.0, 1.0), (2.0, 0.0), (3.0, 1.0)],
+                                      PathProfile(corner_radius=0.0))
+    for end, inward in ((0.0, 1.0), (traj.length, -1.0)):
+        kappa = traj.geometry(end + inward * np.array([0.0, 0.02, 0.1]))[3]
+        assert abs(kappa[0]) < 1e-9
+        assert 0.1 < kappa[1] / kappa[2] < 0.3
+
+
+@pytest.mark.parametrize('count', [3, 4])
+def test_a_timed_path_keeps_its_pace_through_its_points_and_rests_at_both_ends(count):
+    # Points 1 m and 1 s apart on a line: monotone slopes of 1 m/s inside, at rest at the ends.
+    traj = PathTrajectory.from_points([(float(i), float(i), 0.0) for i in range(count)],
+                                      PathProfile(corner_radius=0.0))
+    for t in range(1, count - 1):
+        assert traj.sample(float(t))[2:] == pytest.approx((1.0, 0.0), abs=1e-6)
+    for t in (1e-4, count - 1.0 - 1e-4):
+        assert math.hypot(*traj.sample(t)[2:]) < 1e-3
+
+
+def test_a_corner_far_ahead_leaves_the_cruise_speed_on_the_straight_before_it():
+    # 0.5 m/s is reached 0.5^2 / (2 * 0.3) = 0.42 m in; the corner (0.39 m/s at most on its
+    # 0.3 m arc) needs braking over some 0.16 m only, just before it.
+    traj = PathTrajectory.from_points([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0)])
+    t = np.linspace(0.0, traj.duration, 20001)
+    x, y, xdot, ydot = traj.sample(t)
+    straight = (x > 1.0) & (x < 9.0) & (np.abs(y) < 1e-9)
+    np.testing.assert_allclose(np.hypot(xdot, ydot)[straight], 0.5, rtol=1e-9)
