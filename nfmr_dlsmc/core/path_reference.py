@@ -19,8 +19,10 @@ built in four steps:
    never takes more than half of either segment beside it, which may make it smaller.
 3. The rounded polyline, resampled densely at even arc length, is smoothed by a narrow
    Gaussian (:data:`SMOOTHING` of the smallest arc radius or segment, the arcs enlarged
-   beforehand by what the smoothing takes from them) so that its curvature is continuous,
-   then fitted with a C2 cubic spline over its arc length s
+   beforehand by what the smoothing takes from them) so that its curvature is continuous
+   (the smoothing moves a corner's arc inward by about sigma^2 / (2 R), sigma the
+   Gaussian's width, so a corner is cut a little more than step 2's arc cuts it), then
+   fitted with a C2 cubic spline over its arc length s
    (:class:`scipy.interpolate.CubicSpline`).
    With ``corner_radius = 0`` the spline goes through the points themselves instead.
 4. Untimed: the speed v(s) is the least of the cruise speed, sqrt(lateral_acceleration /
