@@ -115,6 +115,18 @@ class FixSample:
     outlier: bool
 
 
+def _latest_arrived(in_flight: collections.deque, step: int):
+    """
+    Take from ``in_flight`` every (step due, sample) due by ``step``; return the latest.
+
+    None when none is due: odometry messages and localisation fixes travel alike.
+    """
+    arrived = None
+    while in_flight and in_flight[0][0] <= step:
+        arrived = in_flight.popleft()[1]
+    return arrived
+
+
 @dataclass(frozen=True)
 class StepOutput:
     """
@@ -318,7 +330,7 @@ class ChassisWorld:
         if fix_every is not None and self._steps % fix_every == 0:
             self._measure_fix(out.point_p)
         return replace(out, odometry=self._arriving_odometry(),
-                       localization=self._arriving_fix())
+                       localization=_latest_arrived(self._fix_in_flight, self._steps))
 
     def _apply_motors(self) -> None:
         c, m = self._client, self.config.motors
@@ -442,16 +454,6 @@ class ChassisWorld:
                         math.remainder(truth.yaw + float(nyaw), 2 * math.pi), outlier)
         self._fix_in_flight.append((self._steps + self.config.fix_latency_steps, fix))
 
-    def _arriving_fix(self) -> FixSample | None:
-        """Return the latest fix whose latency has passed at this step, if any."""
-        arrived = None
-        while self._fix_in_flight and self._fix_in_flight[0][0] <= self._steps:
-            arrived = self._fix_in_flight.popleft()[1]
-        return arrived
-
     def _arriving_odometry(self) -> OdometrySample | None:
-        """Return the latest message whose latency has passed at this step, if any."""
-        arrived = None
-        while self._odom_in_flight and self._odom_in_flight[0][0] <= self._steps:
-            arrived = self._odom_in_flight.popleft()[1]
-        return arrived
+        """Return the latest odometry message whose latency has passed, if any."""
+        return _latest_arrived(self._odom_in_flight, self._steps)

@@ -249,14 +249,11 @@ class WorldConfig:
 
     def __post_init__(self):
         check_fields(self)
-        rate = self.disturbance.odom_rate
-        if rate * self.physics_dt > 1.0 + 1e-9:
-            raise ParameterError('disturbance.odom_rate', rate, 'must not exceed the physics '
-                                 f'rate 1 / physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
-        rate = self.localization.rate
-        if rate * self.physics_dt > 1.0 + 1e-9:
-            raise ParameterError('localization.rate', rate, 'must not exceed the physics '
-                                 f'rate 1 / physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
+        for name, rate in (('disturbance.odom_rate', self.disturbance.odom_rate),
+                           ('localization.rate', self.localization.rate)):
+            if rate * self.physics_dt > 1.0 + 1e-9:
+                raise ParameterError(name, rate, 'must not exceed the physics rate 1 / '
+                                     f'physics_dt = {1.0 / self.physics_dt:g} Hz', 'Hz')
 
     @property
     def odom_period_steps(self) -> int:
