@@ -23,12 +23,14 @@ from nfmr_dlsmc.core.steering import (
     wheel_commands,
 )
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
 from nfmr_dlsmc.plants.kinematic import check_start, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
 from nfmr_dlsmc.runtime.odometry_wire import sent_time, sent_yaw, sigma_from_variances
 from nfmr_dlsmc.runtime.params import lockstep_tick_source
 from nfmr_dlsmc.runtime.tracking_session import TrackingSession
-from nfmr_sim.sim_params import sim_parameters, sim_settings
+from nfmr_sim.encoders import EncoderConfig, Encoders
+from nfmr_sim.sim_params import sim_parameters, sim_settings, SimSettings
 from nfmr_sim.world import ChassisWorld
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
@@ -37,9 +39,17 @@ import numpy as np
 def simulate_pybullet(session: TrackingSession, x0, duration: float,
                       world_config: WorldConfig | None = None,
                       disturbance: YawRateDisturbance | None = None,
-                      progress=None, observer=None) -> SimResult:
+                      progress=None, observer=None,
+                      encoders: EncoderConfig | None = None) -> SimResult:
     """
     Run ``session`` against the pybullet chassis from pose ``x0`` of P.
+
+    With ``session.fusion`` (D33) the session takes, instead of the world's odometry, the
+    wheel odometry of the encoders (:class:`~nfmr_sim.encoders.Encoders` at their period,
+    the first at t = 0; :class:`~nfmr_dlsmc.core.wheel_odometry.WheelOdometry` from the
+    origin of its own frame, as a robot's starts) and the world's localisation fixes, as
+    the sim node, ``nfmr-wheel-odometry`` and the controller node pass them over ROS, and
+    it ticks on every step.
 
     Per physics step k (t_k = k dt, dt = ``world_config.physics_dt``, which must equal the
     control period ``session.params.dlsmc.dt``): the odometry message the world publishes
@@ -72,6 +82,9 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         Called as ``observer(out)`` with the world's
         :class:`~nfmr_sim.world.StepOutput` after every physics step (joint states, ground
         truth), e.g. to compute wheel odometry from the encoders.
+    encoders : EncoderConfig, optional
+        The encoders' rate and resolution (default: exact, with the sim node's auxiliary
+        topics); read only with ``session.fusion``.
 
     Returns
     -------
@@ -94,7 +107,15 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
                              f'(wheelbase {chassis.wheelbase:g} m, track {chassis.track:g} m, '
                              f'wheel radius {chassis.wheel_radius:g} m)')
     noise = world_config.disturbance
-    per_message = lockstep_tick_source(noise.odom_rate, noise.odom_latency, dt) == 'odom'
+    fused = session.fusion is not None
+    if fused and world_config.fix_period_steps is None:
+        raise ParameterError('fusion.enabled', True, 'needs localisation fixes from the sim '
+                             '(localization.rate > 0, e.g. the sensing preset field)')
+    per_message = not fused and \
+        lockstep_tick_source(noise.odom_rate, noise.odom_latency, dt) == 'odom'
+    wheels_in = _WheelInput(encoders, world_config, params.geometry) if fused else None
+    fix_covariance = np.diag([world_config.localization.position_noise ** 2] * 2
+                             + [world_config.localization.yaw_noise ** 2])
     # What a message's covariance says: the variances of the world's odometry noise.
     sigma = sigma_from_variances(noise.odom_position_noise ** 2, noise.odom_position_noise ** 2,
                                  noise.odom_yaw_noise ** 2)
@@ -110,8 +131,15 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         out = replace(world.observe(), odometry=world.first_odometry())
         for k, varpi in enumerate(dist.tolist()):
             now = sent_time(out.time)
-            odom = out.odometry
+            odom = None if fused else out.odometry
             ticked = None
+            if fused:
+                wheels_in.offer(session, k, out, now)
+                fix = out.localization
+                if fix is not None:
+                    session.on_fix(fix.x, fix.y, sent_yaw(fix.yaw), now, now,
+                                   sent_time(fix.time), None,
+                                   fix_covariance if fix_covariance[0, 0] > 0.0 else None)
             if odom is not None:
                 stamp = sent_time(odom.time)
                 taken = session.on_odometry(odom.state.x, odom.state.y,
@@ -153,6 +181,27 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         omega=commands[:, 1], disturbance=dist, telemetry=dict(zip(fields, telemetry.T)),
         dt=dt, final_state=np.array([final.x, final.y, final.yaw]), steer=steer_rows,
         steer_joint_velocity=joint_rates)
+
+
+class _WheelInput:
+    """The encoders' readings as wheel odometry to a fusing session, at their period."""
+
+    def __init__(self, config: EncoderConfig | None, world_config: WorldConfig, geometry):
+        config = EncoderConfig() if config is None else config
+        self._every = config.period_steps(world_config.physics_dt,
+                                          SimSettings().aux_publish_every)
+        self._encoders = Encoders(config)
+        self._odometry = WheelOdometry(geometry, world_config.tracked_point_offset)
+
+    def offer(self, session: TrackingSession, k: int, out, now: float) -> None:
+        """At every reading's step k, pass the wheel odometry of ``out`` to ``session``."""
+        if k % self._every:
+            return
+        position, velocity = self._encoders.read(out.time, out.joint_position,
+                                                 out.joint_velocity)
+        odometry = self._odometry
+        if odometry.update(now, position[:4], velocity[4:]) is None:
+            session.on_wheel_odometry(*odometry.pose, now, now, now)
 
 
 def world_rtf(sim_seconds: float) -> dict:

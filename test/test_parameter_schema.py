@@ -6,6 +6,7 @@ from pathlib import Path
 import re
 
 from nfmr_dlsmc.analysis.parameter_reference import main as write_reference, render
+from nfmr_dlsmc.core.fix_fusion import FusionConfig
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.schema import (
     from_flat,
@@ -32,7 +33,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = (OuterLoopGains, InnerLoopGains, InputLimits, DlsmcConfig, RobotGeometry, SteerMode,
            NodeOptions, SimSettings, WorldConfig, ChassisConfig, MotorConfig, FrictionConfig,
-           FrictionPatch, DisturbanceConfig, ForcePulse)
+           FrictionPatch, DisturbanceConfig, ForcePulse, FusionConfig)
 NODES = {'controller': controller_parameters(), 'sim': sim_parameters()}
 #: A YAML line ``key: value  # comment`` (value and comment optional).
 LINE = re.compile(r'^(?P<indent> *)(?P<key>[^\s:#][^:#]*?):(?P<value>[^#]*?)\s*'

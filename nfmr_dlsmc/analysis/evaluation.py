@@ -9,7 +9,7 @@ process.
 from dataclasses import dataclass, replace
 import time
 
-from nfmr_dlsmc.analysis.run_setup import pybullet_world
+from nfmr_dlsmc.analysis.run_setup import pybullet_settings
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
@@ -20,6 +20,7 @@ from nfmr_dlsmc.core.metrics import (
     HOLD_ROWS,
     simulation_metrics,
 )
+from nfmr_dlsmc.core.sensing import with_controller_sensing
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
@@ -81,6 +82,8 @@ class Evaluation:
         [s]
     disturbance : str
         ``'none'`` or ``'paper'``.
+    encoders : object or None
+        The pybullet chassis's encoders (read by a controller that fuses them with fixes).
 
     """
 
@@ -93,6 +96,7 @@ class Evaluation:
     x0: tuple
     duration: float
     disturbance: str
+    encoders: object = None
 
 
 def load_evaluation(plant: str, controller_name: str, x0, duration: float | None,
@@ -143,7 +147,7 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
         flat['control_rate'] = 1.0 / dt
     if path is not None:
         flat.update(path_values(path))
-    params = controller_params(flat)
+    params = controller_params(with_controller_sensing(flat, sensing))
     trajectory = (params.trajectory if trajectory_name is None
                   else make_trajectory(trajectory_name))
     if controller_name == 'dlsmc':
@@ -162,13 +166,15 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     if steering is not None and plant != 'pybullet':
         raise ParameterError('steering', steering, 'applies to the pybullet plant: the '
                              'kinematic model has no steer motors')
-    world = (pybullet_world(params_file, params.dlsmc.dt, sensing, steering)
-             if plant == 'pybullet' else None)
+    settings = (pybullet_settings(params_file, params.dlsmc.dt, sensing, steering)
+                if plant == 'pybullet' else None)
+    world = None if settings is None else settings.world
     if world is not None:  # the rule nfmr-run applies
         check_odometry_timing(world.disturbance.odom_rate, world.disturbance.odom_latency,
                               flat)
     return Evaluation(plant, controller_name, controller, params, trajectory, world,
-                      tuple(x0), duration, disturbance)
+                      tuple(x0), duration, disturbance,
+                      None if settings is None else settings.encoders)
 
 
 def _file_start(params_file, plant: str) -> tuple:
@@ -182,7 +188,7 @@ def _file_start(params_file, plant: str) -> tuple:
 
 
 def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
-              duration: float, world=None, disturbance=None, progress=None):
+              duration: float, world=None, disturbance=None, progress=None, encoders=None):
     """
     Run the tracking law ``law`` on ``plant`` in this process, stopping at a path's end.
 
@@ -203,6 +209,8 @@ def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
         Added to the commanded yaw rate.
     progress : callable, optional
         ``progress(t)`` with the simulated time [s] (pybullet only).
+    encoders : object, optional
+        The chassis's encoders, read when ``params.fusion`` is enabled (pybullet only).
 
     Returns
     -------
@@ -213,7 +221,7 @@ def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
         session = TrackingSession(replace(params, trajectory=trajectory),
                                   **session_options({}), law=law)
         return robot_plant('pybullet').simulate(session, x0, duration, world, disturbance,
-                                                progress)
+                                                progress, encoders=encoders)
     run = simulate(with_arrival(law, trajectory, params.arrival), trajectory, x0, duration,
                    params.dlsmc.dt, disturbance)
     return with_steer_angles(run, params.geometry, params.steering)
@@ -246,7 +254,8 @@ def evaluate(evaluation: Evaluation, hold_from: float,
     start = time.process_time()
     sim = plant_run(evaluation.plant, evaluation.controller, evaluation.params,
                     evaluation.trajectory, evaluation.x0, evaluation.duration,
-                    evaluation.world, disturbance_by_name(evaluation.disturbance), progress)
+                    evaluation.world, disturbance_by_name(evaluation.disturbance), progress,
+                    evaluation.encoders)
     cpu_s = time.process_time() - start
     goal = getattr(evaluation.trajectory, 'end_pose', None)
     path_end = None if goal is None else evaluation.trajectory.duration

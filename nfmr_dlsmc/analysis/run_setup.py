@@ -20,6 +20,16 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None,
     """
     Return the pybullet chassis's world configuration for a controller of period ``dt``.
 
+    ``.world`` of :func:`pybullet_settings`, which says more.
+    """
+    return pybullet_settings(params_file, dt, sensing, steering).world
+
+
+def pybullet_settings(params_file, dt: float, sensing: str | None = None,
+                      steering: str | None = None):
+    """
+    Return the pybullet chassis's settings for a controller of period ``dt``.
+
     Parameters
     ----------
     params_file : str or Path or None
@@ -29,15 +39,15 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None,
         step, so the world's ``physics_dt`` must equal it.
     sensing : str, optional
         A sensing preset (:data:`~nfmr_dlsmc.core.sensing.SENSING_PRESETS`) replacing the
-        file's odometry (``--sensing``).
+        file's odometry, encoders and fixes (``--sensing``).
     steering : str, optional
         A steering preset (:data:`~nfmr_dlsmc.core.steering_presets.STEERING_PRESETS`)
         replacing the file's steer motor lag and rate limit (``--steering``).
 
     Returns
     -------
-    WorldConfig
-        ``.world`` of the plant's settings.
+    SimSettings
+        The plant's settings: ``.world`` and ``.encoders`` among them.
 
     Raises
     ------
@@ -52,12 +62,13 @@ def pybullet_world(params_file, dt: float, sensing: str | None = None,
         flat = with_sensing(flat, sensing)
     if steering is not None:
         flat = with_steering(flat, steering)
-    world = robot_plant('pybullet').settings(flat).world
+    settings = robot_plant('pybullet').settings(flat)
+    world = settings.world
     if world.physics_dt != dt:
         raise ParameterError('physics_dt', world.physics_dt,
                              f'must equal the control period {dt:g} s: the pybullet plant '
                              'steps the controller once per physics step', 's')
-    return world
+    return settings
 
 
 def start_pose(trajectory) -> np.ndarray:

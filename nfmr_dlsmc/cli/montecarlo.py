@@ -40,6 +40,7 @@ from nfmr_dlsmc.cli.common import (
     BATCH_ROBOT_BYTES,
     check_memory,
     check_run_length,
+    check_unfused_sensing,
     check_writable,
     cluster_report,
     describe_workers,
@@ -185,6 +186,7 @@ def _run(args) -> int:
     if args.plots:
         require('--plots', 'plots')
         check_writable(args.plots, '--plots', directory=True)
+    check_unfused_sensing(args.sensing, 'nfmr-montecarlo')
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')

@@ -13,6 +13,7 @@ import sys
 from nfmr_dlsmc.cli.common import (
     add_steering,
     check_ros_log_folder,
+    check_unfused_sensing,
     check_writable,
     OneLineParser,
     run_command,
@@ -79,6 +80,7 @@ def _run(args) -> int:
         raise UsageError(f'--duration must be a finite number > 0 [s], got {args.duration}')
     if not args.stall_timeout > 0.0:
         raise UsageError(f'--stall-timeout must be > 0, got {args.stall_timeout}')
+    check_unfused_sensing(args.sensing, 'nfmr-run')
     if args.hold_from is not None and not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:

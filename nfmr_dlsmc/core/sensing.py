@@ -2,16 +2,23 @@
 Named sensing presets: the odometry a robot gives its controller.
 
 A preset sets the simulated odometry's rate, latency, white noise and drifting bias (the sim's
-``disturbance.odom_*`` parameters). ``ideal`` is the simulator's perfect odometry of every
-physics step; ``good`` is a well-built wheel-and-IMU odometry or a motion-capture feed;
-``harsh`` a slow, late, noisy and drifting one.
+``disturbance.odom_*`` parameters), its encoders (``encoders.*``) and its localisation fixes
+(``localization.*``). ``ideal`` is the simulator's perfect odometry of every physics step;
+``good`` is a well-built wheel-and-IMU odometry or a motion-capture feed; ``harsh`` a slow,
+late, noisy and drifting one; ``field`` what a field robot has: wheel encoders at 100 Hz (a
+12-bit absolute encoder on each steer joint, 4096 counts per revolution on each wheel) and
+an absolute fix at 10 Hz, 50 ms late, 1 cm / 10 mrad of noise, one fix in a hundred 20 to
+50 cm off. Under ``field`` the controller fuses the two (:data:`SENSING_CONTROLLER`,
+``fusion.enabled``, doc/design.md D33); the ``odom`` topic it no longer takes is ``good``'s.
 """
 
+import math
 from types import MappingProxyType
 
 from nfmr_dlsmc.core.validation import ParameterError
 
-__all__ = ['SENSING_KEYS', 'SENSING_PRESETS', 'with_sensing']
+__all__ = ['SENSING_CONTROLLER', 'SENSING_KEYS', 'SENSING_PRESETS', 'with_controller_sensing',
+           'with_sensing']
 
 #: The sim parameters a preset sets, with their units.
 SENSING_KEYS = MappingProxyType({
@@ -21,20 +28,35 @@ SENSING_KEYS = MappingProxyType({
     'disturbance.odom_yaw_noise': 'rad',
     'disturbance.odom_position_bias_walk': 'm/sqrt(s)',
     'disturbance.odom_yaw_bias_walk': 'rad/sqrt(s)',
+    'encoders.rate': 'Hz',
+    'encoders.steer_resolution': 'rad',
+    'encoders.drive_counts_per_rev': '',
+    'localization.rate': 'Hz',
+    'localization.latency': 's',
+    'localization.position_noise': 'm',
+    'localization.yaw_noise': 'rad',
+    'localization.outlier_fraction': '',
 })
 
+#: No encoders of their own (joint_states exact, with the auxiliary topics) and no fixes.
+_NO_FIELD_SENSORS = (0.0, 0.0, 0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
-def _preset(rate, latency, position_noise, yaw_noise, position_walk, yaw_walk):
-    return MappingProxyType(dict(zip(SENSING_KEYS, (rate, latency, position_noise, yaw_noise,
-                                                    position_walk, yaw_walk))))
+
+def _preset(*values):
+    return MappingProxyType(dict(zip(SENSING_KEYS, values, strict=True)))
 
 
 #: Preset name -> the values of :data:`SENSING_KEYS` it sets.
 SENSING_PRESETS = MappingProxyType({
-    'ideal': _preset(1000.0, 0.0, 0.0, 0.0, 0.0, 0.0),
-    'good': _preset(100.0, 0.010, 0.001, 0.001, 0.0, 0.0),
-    'harsh': _preset(50.0, 0.040, 0.003, 0.003, 0.001, 0.001),
+    'ideal': _preset(1000.0, 0.0, 0.0, 0.0, 0.0, 0.0, *_NO_FIELD_SENSORS),
+    'good': _preset(100.0, 0.010, 0.001, 0.001, 0.0, 0.0, *_NO_FIELD_SENSORS),
+    'harsh': _preset(50.0, 0.040, 0.003, 0.003, 0.001, 0.001, *_NO_FIELD_SENSORS),
+    'field': _preset(100.0, 0.010, 0.001, 0.001, 0.0, 0.0,
+                     100.0, 2.0 * math.pi / 4096, 4096, 10.0, 0.050, 0.01, 0.01, 0.01),
 })
+
+#: Preset name -> the controller parameters it implies where the parameter file is silent.
+SENSING_CONTROLLER = MappingProxyType({'field': MappingProxyType({'fusion.enabled': True})})
 
 
 def with_sensing(flat: dict, preset: str) -> dict:
@@ -55,3 +77,14 @@ def with_sensing(flat: dict, preset: str) -> dict:
                              f"must be one of {', '.join(SENSING_PRESETS)}")
     kept = {k: v for k, v in flat.items() if k not in SENSING_KEYS and k != 'sensing'}
     return {**kept, **SENSING_PRESETS[preset]}
+
+
+def with_controller_sensing(flat: dict, preset: str | None) -> dict:
+    """
+    Return flat controller parameters with what ``preset`` implies where they are silent.
+
+    ``field`` turns ``fusion.enabled`` on unless the file sets it (false: the controller
+    takes the ``odom`` topic all the same).
+    """
+    implied = SENSING_CONTROLLER.get(preset or '', {})
+    return {**implied, **flat}

@@ -333,7 +333,7 @@ def _sensing_args(preset: str | None) -> list[str]:
     """
     if preset is None:
         return []
-    values = [f'{key}:={float(value)!r}' for key, value in SENSING_PRESETS[preset].items()]
+    values = [f'{key}:={value!r}' for key, value in SENSING_PRESETS[preset].items()]
     return [arg for value in ["sensing:=''", *values] for arg in ('-p', value)]
 
 

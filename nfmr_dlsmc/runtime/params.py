@@ -21,6 +21,7 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
 - ``steering.*`` (:class:`~nfmr_dlsmc.core.steering.SteerMode`) and ``geometry.*``
   (:class:`~nfmr_dlsmc.core.steering.RobotGeometry`);
 - ``estimator.*`` (:class:`~nfmr_dlsmc.core.pose_estimator.EstimatorConfig`);
+- ``fusion.*`` (:class:`~nfmr_dlsmc.core.fix_fusion.FusionConfig`);
 - the node's own options (:class:`NodeOptions`).
 
 Unknown names are errors, so a typo never silently leaves a default in place.
@@ -32,6 +33,7 @@ from pathlib import Path
 from nfmr_dlsmc.baselines.registry import gain_sections
 from nfmr_dlsmc.core.arrival import ArrivalConfig, check_goal_reach
 from nfmr_dlsmc.core.errors import NfmrError
+from nfmr_dlsmc.core.fix_fusion import FusionConfig
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.path_reference import PathProfile
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
@@ -97,6 +99,8 @@ class ControllerParams:
     steering: SteerMode = field(default_factory=SteerMode)
     geometry: RobotGeometry = field(default_factory=RobotGeometry)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    #: Wheel odometry corrected by localisation fixes instead of one odometry stream (D33).
+    fusion: FusionConfig = field(default_factory=FusionConfig)
     #: How a path's points become a reference: the file's, or one received by the node.
     path_profile: PathProfile = field(default_factory=lambda: PathProfile(
         omega_max=InputLimits().omega_max, v_max=InputLimits().v_max))
@@ -354,7 +358,8 @@ def controller_parameters() -> list[Param]:
     law = [p for p in params_of(DlsmcConfig) if p.name != 'dt']  # as control_rate
     return [_CONTROL_RATE, *law, *params_of(OuterLoopGains), *params_of(InnerLoopGains),
             *params_of(InputLimits), *params_of(RobotGeometry), *_trajectory_parameters(),
-            *params_of(SteerMode), *params_of(EstimatorConfig), *params_of(NodeOptions)]
+            *params_of(SteerMode), *params_of(EstimatorConfig), *params_of(FusionConfig),
+            *params_of(NodeOptions)]
 
 
 def controller_parameter_defaults() -> dict:
@@ -406,6 +411,7 @@ def controller_params(flat: dict) -> ControllerParams:
                             steering=mode,
                             geometry=from_flat(RobotGeometry, flat),
                             estimator=from_flat(EstimatorConfig, flat),
+                            fusion=from_flat(FusionConfig, flat),
                             path_profile=path_profile,
                             arrival=arrival)
 

@@ -8,7 +8,9 @@ the steering held, until fresh odometry returns. Trajectory time starts at the f
 odometry and runs on the control clock; it keeps running while the robot is stopped. With
 ``estimator.enabled`` the pose of a tick is the estimate at the tick's time
 (:class:`~nfmr_dlsmc.core.pose_estimator.PoseEstimator`: odometry fused at its stamps, the
-commands since predicted), otherwise the latest odometry.
+commands since predicted), otherwise the latest odometry. With ``fusion.enabled`` that
+odometry is the wheel odometry placed in the map by localisation fixes
+(:meth:`TrackingSession.on_wheel_odometry`, :meth:`TrackingSession.on_fix`; D33).
 """
 
 from dataclasses import dataclass, replace
@@ -17,6 +19,7 @@ from typing import NamedTuple
 
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, check_goal_reach, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.fix_fusion import FixFusion, FixVerdict
 from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
@@ -162,6 +165,7 @@ class TrackingSession:
         self.controller = with_arrival(self.law, params.trajectory, params.arrival)
         self._outcome = 0.0  # the arrival outcome last reported
         self.estimator = PoseEstimator(params.estimator) if params.estimator.enabled else None
+        self.fusion = FixFusion(params.fusion) if params.fusion.enabled else None
         self.restarts = 0
         self._t0 = None  # control time [s] of the first valid odometry
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
@@ -301,6 +305,52 @@ class TrackingSession:
         if self._t0 is None:
             self._t0 = verdict.control_time
         return True
+
+    def on_wheel_odometry(self, x: float, y: float, theta: float, wall_time: float,
+                          control_time: float, stamp: float | None = None,
+                          frame_id: str | None = None) -> bool:
+        """
+        Take wheel odometry of P (``fusion`` on): pose [m, m, rad] in the odometry frame.
+
+        Placed in the map by the fixes so far (:class:`~nfmr_dlsmc.core.fix_fusion.FixFusion`)
+        and taken as odometry by :meth:`on_odometry`, which judges it (frame, finite, stamp,
+        jump) and returns whether to tick on it; before the first fix it is kept and not used
+        (False). Stamps more than ``restart_threshold`` older than the latest mean the
+        wheel odometry started over: it is placed in the map again from the next fix.
+        """
+        stamp = control_time if stamp is None else stamp
+        fusion = self.fusion
+        if frame_id is not None and frame_id != self.gate.rules.frame or \
+                not all(math.isfinite(v) for v in (x, y, theta, stamp)):
+            return self.on_odometry(x, y, theta, wall_time, control_time, stamp, frame_id)
+        latest = fusion.latest_odometry
+        if latest is not None and stamp <= latest - self.gate.rules.restart_threshold:
+            fusion.reset()
+        if not fusion.on_odometry(stamp, x, y, theta):
+            return False  # out of order
+        placed = fusion.pose()
+        if placed is None:
+            return False
+        return self.on_odometry(*placed[1:], wall_time, control_time, stamp)
+
+    def on_fix(self, x: float, y: float, theta: float, wall_time: float,
+               control_time: float, stamp: float, frame_id: str | None = None,
+               covariance=None) -> FixVerdict:
+        """
+        Take a localisation fix of P (``fusion`` on): pose [m, m, rad] in the map.
+
+        Fused at its ``stamp`` [s] (:meth:`FixFusion.on_fix`; ``covariance`` of (x, y,
+        theta), None for the configured noise), or refused with its reason. While the
+        wheel odometry is older than ``odom_timeout``, a fix fused or waiting for it is
+        taken as odometry itself (:meth:`on_odometry`), so that the robot stops only when
+        neither source is fresh.
+        """
+        verdict = self.fusion.on_fix(stamp, x, y, theta, covariance, control_time, frame_id)
+        latest = self.fusion.latest_odometry
+        wheels_stale = latest is None or control_time - latest > self.gate.rules.timeout
+        if wheels_stale and verdict.reason is None and self.fusion.transform is not None:
+            self.on_odometry(x, y, theta, wall_time, control_time, stamp)
+        return verdict
 
     def _restart(self) -> None:
         """Start tracking over: the odometry source started over."""
