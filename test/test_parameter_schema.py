@@ -16,6 +16,7 @@ from nfmr_dlsmc.core.schema import (
     POSITIVE,
 )
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
+from nfmr_dlsmc.core.swerve_kinematics import SwerveConfig
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.params import controller_parameters, NodeOptions
 from nfmr_sim.sim_params import sim_parameters, SimSettings
@@ -33,7 +34,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = (OuterLoopGains, InnerLoopGains, InputLimits, DlsmcConfig, RobotGeometry, SteerMode,
            NodeOptions, SimSettings, WorldConfig, ChassisConfig, MotorConfig, FrictionConfig,
-           FrictionPatch, DisturbanceConfig, ForcePulse, FusionConfig)
+           FrictionPatch, DisturbanceConfig, ForcePulse, SwerveConfig, FusionConfig)
 NODES = {'controller': controller_parameters(), 'sim': sim_parameters()}
 #: A YAML line ``key: value  # comment`` (value and comment optional).
 LINE = re.compile(r'^(?P<indent> *)(?P<key>[^\s:#][^:#]*?):(?P<value>[^#]*?)\s*'
