@@ -7,8 +7,14 @@ from pathlib import Path
 from nfmr_dlsmc.core.fix_fusion import FusionConfig
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_controller_sensing
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.runtime.params import controller_parameters, controller_params, ControllerParams
+from nfmr_dlsmc.runtime.params import (
+    controller_parameters,
+    controller_params,
+    ControllerParams,
+    load_gain_blocks,
+)
 from nfmr_dlsmc.runtime.tracking_session import TrackingSession
+import numpy as np
 import pytest
 
 #: Map = odom shifted by (1, 4) and turned by 0.1 rad.
@@ -167,3 +173,49 @@ def test_the_robot_profile_holds_case_1_on_wheel_odometry_and_fixes_of_the_field
     assert m.hold_steer_joint_rate_max <= 2.0
     # About 400 fixes, a few outliers among them, each refused.
     assert s.fusion.fused >= 350 and 1 <= s.fusion.refused['outlier'] <= 20
+
+
+@pytest.mark.sim
+def test_every_law_of_the_comparison_fuses_under_the_field_preset():
+    # Stanley on Case 1 for 3 s: the fixes place it (the world's `odom` is not what it sees):
+    # a world without fixes would be refused, so it is the field world that ran.
+    from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario
+    from nfmr_dlsmc.runtime.share import shipped_config
+
+    blocks = load_gain_blocks(shipped_config('comparison.yaml'))
+    short = replace(CASE1_LONGITUDINAL, duration=3.0)
+    run = run_scenario('stanley', blocks.get('stanley'), short, 'pybullet', 'field')
+    assert len(run.t) == 3000 and np.isfinite(run.state).all()
+
+
+@pytest.mark.sim
+def test_a_montecarlo_start_fuses_when_its_task_says_so():
+    from nfmr_dlsmc.analysis.montecarlo import _run_start
+    from nfmr_dlsmc.analysis.run_setup import pybullet_settings
+
+    root = Path(__file__).resolve().parents[1]
+    flat = with_controller_sensing({}, 'field')
+    params = controller_params(flat)
+    field = pybullet_settings(root / 'config' / 'robot_case1.yaml', 0.001, 'field')
+    task = ((1.0, 4.0, 0.0), 'pybullet', params.dlsmc, params.trajectory, 2.0, None, 1.0,
+            field.world, params.geometry, params.steering, params.estimator, params.arrival,
+            params.fusion, field.encoders)
+    figures = _run_start(task)
+    assert math.isfinite(figures['hold_distance_p99'])
+    without_fixes = pybullet_settings(None, 0.001, 'good').world
+    with pytest.raises(ParameterError, match='localization.rate > 0'):
+        _run_start(task[:7] + (without_fixes,) + task[8:])
+
+
+@pytest.mark.commands
+def test_nfmr_run_refuses_the_field_preset_in_one_line_until_the_node_fuses():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, '-m', 'nfmr_dlsmc.cli.run', '--sensing', 'field',
+                           '--no-record'], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
+        'nfmr-run: error: --sensing field: nfmr-run does not fuse wheel odometry with '
+        'localisation fixes yet (nfmr-eval, nfmr-tune, nfmr-compare and nfmr-montecarlo '
+        'do, in process)']

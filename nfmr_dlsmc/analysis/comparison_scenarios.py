@@ -14,7 +14,7 @@ from nfmr_dlsmc.core.arrival import ArrivalConfig, with_arrival
 from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
 from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
-from nfmr_dlsmc.core.sensing import with_sensing
+from nfmr_dlsmc.core.sensing import with_controller_sensing, with_sensing
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.core.steering_presets import with_steering
 from nfmr_dlsmc.core.trajectories import make_trajectory
@@ -100,7 +100,8 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     before the wheel mapping and the chassis is that of the default world of the registered
     ``pybullet`` plant (Table 1, physics at 1 ms). With a ``sensing`` preset (pybullet
     only) the world's odometry is the preset's and every law sees the pose through the
-    robot profile's estimator (``config/robot_case1.yaml``), so that all compare alike;
+    robot profile's estimator (``config/robot_case1.yaml``), so that all compare alike
+    (under ``field`` each fuses the wheel odometry with the fixes, D33);
     with a ``steering`` preset (pybullet only) the steer motors are the preset's.
     """
     if plant not in PLANTS:
@@ -116,13 +117,14 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
         flat = {} if sensing is None else with_sensing({}, sensing)
-        world = plant_.settings(flat if steering is None
-                                else with_steering(flat, steering)).world
+        settings = plant_.settings(flat if steering is None else with_steering(flat, steering))
         params = ControllerParams(
             dlsmc=DlsmcConfig(dt=scenario.dt), trajectory=trajectory, arrival=scenario.arrival,
-            estimator=EstimatorConfig() if sensing is None else robot_estimator())
+            estimator=EstimatorConfig() if sensing is None else robot_estimator(),
+            fusion=controller_params(with_controller_sensing({}, sensing)).fusion)
         return plant_.simulate(TrackingSession(params, **session_options({}), law=law),
-                               scenario.x0, scenario.duration, world, scenario.disturbance)
+                               scenario.x0, scenario.duration, settings.world,
+                               scenario.disturbance, encoders=settings.encoders)
     result = simulate(with_arrival(law, trajectory, scenario.arrival), trajectory, scenario.x0,
                       scenario.duration, scenario.dt, scenario.disturbance)
     return with_steer_angles(result, RobotGeometry(), SteerMode())

@@ -56,7 +56,7 @@ def uses_batch(plant: str, config: DlsmcConfig, trajectory=None) -> bool:
 
 def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
                duration: float, disturbance, hold_last: float, jobs: int,
-               progress, known: dict | None = None) -> dict:
+               progress, known: dict | None = None, encoders=None) -> dict:
     """
     Run the DLSMC from every start.
 
@@ -85,6 +85,8 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     known : dict, optional
         Start index -> its figures as returned here, for the starts already run (one run
         per start only): not run again, their figures returned as given.
+    encoders : object, optional
+        The chassis's encoders, read when ``params.fusion`` is on (pybullet only).
 
     Returns
     -------
@@ -109,7 +111,8 @@ def run_starts(plant: str, params: ControllerParams, world, starts: np.ndarray,
     rows = [(known or {}).get(k) for k in range(len(starts))]
     tasks = {k: (tuple(x0), plant, params.dlsmc, params.trajectory, duration, disturbance,
                  hold_last, world, params.geometry, params.steering, params.estimator,
-                 params.arrival) for k, x0 in enumerate(starts.tolist()) if rows[k] is None}
+                 params.arrival, params.fusion, encoders)
+             for k, x0 in enumerate(starts.tolist()) if rows[k] is None}
     if not tasks:
         return _columns(rows)
     with worker_pool(jobs, quiet=True) as pool:
@@ -137,18 +140,21 @@ def _run_start(task: tuple) -> dict:
     Run one start in a worker process: the :data:`RUN_KEYS` figures (NaN where undefined).
 
     ``task`` is (x0, plant, DlsmcConfig, trajectory, duration [s], disturbance, hold_last
-    [s], world, geometry, steering, estimator, arrival); world to estimator are used on
-    pybullet only, arrival along a path only (then :data:`PATH_RUN_KEYS`). The hold figures
-    cover the last ``hold_last`` seconds (the whole run if it is shorter).
+    [s], world, geometry, steering, estimator, arrival, fusion, encoders); world to
+    estimator, fusion and encoders are used on pybullet only, arrival along a path only
+    (then :data:`PATH_RUN_KEYS`). The hold figures cover the last ``hold_last`` seconds (the
+    whole run if it is shorter).
     """
     x0, plant, config, trajectory, duration, disturbance, hold_last, world, geometry, \
-        steering, estimator, arrival = task
+        steering, estimator, arrival, fusion, encoders = task
     goal = getattr(trajectory, 'end_pose', None)
     if plant == 'pybullet':
         params = ControllerParams(dlsmc=config, trajectory=trajectory, steering=steering,
-                                  geometry=geometry, estimator=estimator, arrival=arrival)
+                                  geometry=geometry, estimator=estimator, arrival=arrival,
+                                  fusion=fusion)
         result = robot_plant('pybullet').simulate(
-            TrackingSession(params, **session_options({})), x0, duration, world, disturbance)
+            TrackingSession(params, **session_options({})), x0, duration, world, disturbance,
+            encoders=encoders)
     else:
         result = simulate(with_arrival(DlsmcController(config), trajectory, arrival),
                           trajectory, x0, duration, config.dt, disturbance)

@@ -393,7 +393,8 @@ def check_unfused_sensing(sensing: str | None, command: str) -> None:
     """
     if sensing in SENSING_CONTROLLER:
         raise UsageError(f'--sensing {sensing}: {command} does not fuse wheel odometry with '
-                         'localisation fixes yet (nfmr-eval and nfmr-tune do, in process)')
+                         'localisation fixes yet (nfmr-eval, nfmr-tune, nfmr-compare and '
+                         'nfmr-montecarlo do, in process)')
 
 
 @contextmanager

@@ -42,7 +42,6 @@ from nfmr_dlsmc.cli.common import (
     add_steering,
     add_workers,
     check_run_length,
-    check_unfused_sensing,
     check_writable,
     cluster_report,
     describe_workers,
@@ -121,7 +120,6 @@ def _run(args) -> int:
              else list(dict.fromkeys(['dlsmc', *(args.controllers or CONTROLLER_NAMES)])))
     blocks = checked_gain_blocks(gains_path, names)
     check_writable(args.out, '--out', directory=True)  # after the checks, before the runs
-    check_unfused_sensing(args.sensing, 'nfmr-compare')
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')

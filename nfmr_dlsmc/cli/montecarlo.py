@@ -33,14 +33,13 @@ from nfmr_dlsmc.analysis.montecarlo import (
     summarise,
     uses_batch,
 )
-from nfmr_dlsmc.analysis.run_setup import pybullet_world, random_starts, start_pose
+from nfmr_dlsmc.analysis.run_setup import pybullet_settings, random_starts, start_pose
 from nfmr_dlsmc.cli.common import (
     add_steering,
     add_workers,
     BATCH_ROBOT_BYTES,
     check_memory,
     check_run_length,
-    check_unfused_sensing,
     check_writable,
     cluster_report,
     describe_workers,
@@ -56,7 +55,7 @@ from nfmr_dlsmc.cli.common import (
     workers,
 )
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
-from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_controller_sensing
 from nfmr_dlsmc.runtime.extras import require
 from nfmr_dlsmc.runtime.params import (
     controller_params,
@@ -178,7 +177,7 @@ def _run(args) -> int:
     flat = load_params_file(args.params) if args.params else {}
     if args.path is not None:
         flat |= path_values(path_file(str(args.path)))
-    params = controller_params(flat)
+    params = controller_params(with_controller_sensing(flat, args.sensing))
     if args.duration is None:  # a path's own and a margin to arrive, else the paper's
         args.duration = getattr(params.trajectory, 'duration',
                                 PAPER_DURATION - PATH_MARGIN) + PATH_MARGIN
@@ -186,15 +185,15 @@ def _run(args) -> int:
     if args.plots:
         require('--plots', 'plots')
         check_writable(args.plots, '--plots', directory=True)
-    check_unfused_sensing(args.sensing, 'nfmr-montecarlo')
     if args.sensing is not None and args.plant != 'pybullet':
         raise UsageError('--sensing applies to --plant pybullet: the kinematic model has no '
                          'odometry')
     if args.steering is not None and args.plant != 'pybullet':
         raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
                          'steer motors')
-    world = (pybullet_world(args.params, params.dlsmc.dt, args.sensing, args.steering)
-             if args.plant == 'pybullet' else None)
+    settings = (pybullet_settings(args.params, params.dlsmc.dt, args.sensing, args.steering)
+                if args.plant == 'pybullet' else None)
+    world = None if settings is None else settings.world
     origin = start_pose(params.trajectory)
     starts = random_starts(np.random.default_rng(args.seed), origin, args.x0_range, args.n)
     batch = uses_batch(args.plant, params.dlsmc, params.trajectory)
@@ -225,7 +224,8 @@ def _run(args) -> int:
         try:
             runs = run_starts(args.plant, params, world, starts, args.duration,
                               disturbance_by_name(args.disturbance), args.hold_last, where,
-                              _progress(begin, args.plant, starts, add), known)
+                              _progress(begin, args.plant, starts, add), known,
+                              None if settings is None else settings.encoders)
         except SchedulerLost as lost:
             print(file=sys.stderr)  # after the progress line
             if lost.partial is not None:
