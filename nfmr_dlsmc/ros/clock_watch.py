@@ -3,9 +3,18 @@ The launcher's spinning: its nodes (the recorder, the lifecycle client) and /clo
 
 :class:`ClockWatch` spins them for as long as asked — the lifecycle client's executor first,
 so that the controller's answers are taken at once, not behind the recorder's backlog on a
-busy machine — follows simulated time from
-``/clock`` whether the run is recorded or not, tells when another ROS source reaches the
-run's topics, and at the end waits for the recorder to take the last messages.
+busy machine — follows simulated time whether the run is recorded or not, tells when another
+ROS source reaches the run's topics, and at the end waits for the recorder to take the last
+messages.
+
+Simulated time comes from two sources. ``/clock``, taken best effort and only the newest,
+shows the progress at every step the launcher has time for; on a busy machine it may skip or
+lose messages, the last one included. The sim's status on ``/diagnostics``
+(:data:`~nfmr_dlsmc.ros.run_series.SIM_STATUS_NAME`), which it publishes once a second of
+wall time and at once when it stops at ``max_time``, says where it stands, and how many
+steps it took: the end of a run is told from it. Once a reliable /clock reader of depth 10
+here, behind on a busy machine, had the run's last /clock messages wait for DDS's repair
+beyond the stall timeout, and the run was reported stalled at its very end.
 """
 
 import time
@@ -47,10 +56,11 @@ class ClockWatch:
         self._clock_ns = 0
         self.backwards = 0  # /clock messages earlier than the one before
         node.create_subscription(Clock, '/clock', self._on_clock,
-                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+                                 QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
         #: The sim's last stepping counters (:func:`~nfmr_dlsmc.ros.run_series.sim_stepping`).
         self.sim_stepping = None
-        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
+                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
 
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:
         self.sim_stepping = status_figures(msg, SIM_STATUS_NAME) or self.sim_stepping
@@ -81,8 +91,31 @@ class ClockWatch:
 
     @property
     def sim_time(self) -> float:
-        """Return the simulated time of the last /clock message [s]."""
-        return self._clock_ns * 1e-9
+        """Return the simulated time [s] of the newest /clock message or sim status."""
+        return max(self._clock_ns * 1e-9, self.status_time)
+
+    @property
+    def status_time(self) -> float:
+        """Return the simulated time [s] of the sim's newest status (0 before the first)."""
+        return (self.sim_stepping or {}).get('sim_time_s', 0.0)
+
+    def wait_for_recording(self, topic: str, count: int, patience: float) -> bool:
+        """
+        Spin until the recorder has written ``count`` messages of ``topic``.
+
+        Returns whether it has; False when their number stood still for ``patience`` [s,
+        wall clock] before (or at once when nothing is recorded).
+        """
+        if self.recorder is None:
+            return False
+        written, since = -1, time.monotonic()
+        while self.recorder.written(topic) < count and not self.recorder.failure:
+            if self.recorder.written(topic) != written:
+                written, since = self.recorder.written(topic), time.monotonic()
+            elif time.monotonic() - since > patience:
+                return False
+            self.spin(0.05)
+        return self.recorder.written(topic) >= count
 
     def drain(self, quiet: float = 0.5, longest: float = DRAIN_TIMEOUT) -> None:
         """

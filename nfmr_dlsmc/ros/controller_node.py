@@ -79,6 +79,7 @@ from nfmr_dlsmc.core.path_reference import PathError, stamped_points
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaLifecycleNode
+from nfmr_dlsmc.ros.qos import recorded_qos, STEP_QOS
 from nfmr_dlsmc.ros.scene import reference_markers, reference_path
 from nfmr_dlsmc.runtime.clock_rate import ClockRateWatch
 from nfmr_dlsmc.runtime.loop_stats import LoopStats
@@ -101,11 +102,11 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from visualization_msgs.msg import MarkerArray
 
-COMMAND_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: Commands and state of every tick, kept for a recorder seconds behind (nfmr_dlsmc.ros.qos).
+COMMAND_QOS = STEP_QOS
 #: The reference path is kept for subscribers that join later.
 PATH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
-MARKER_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 #: Paths from outside: reliable, volatile (matches a transient-local publisher too).
 PATH_IN_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 #: Answers to paths from outside: reliable, volatile, a few kept for a slow reader.
@@ -113,6 +114,7 @@ PATH_STATUS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
+MARKER_QOS = recorded_qos(1.0 / MARKER_PERIOD)
 DIAGNOSTICS_PERIOD = 1.0  # [s] of the node clock: /diagnostics once a second
 INPUT_SPIN_TIMEOUT = 0.1  # [s] wall time the input thread waits at most for its next event
 ZERO_ACK_TIMEOUT = 0.5  # [s] wall time the zero command waits for its subscribers' acks
@@ -222,7 +224,8 @@ class ControllerNode(SchemaLifecycleNode):
         # The context's end ends the thread at once (the executor is woken then too), so
         # that nothing keeps the node and its DDS participant past it.
         self.context.on_shutdown(self._input_thread.running.clear)
-        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
+                                               recorded_qos(1.0 / DIAGNOSTICS_PERIOD))
         self._path_status_pub = self.create_publisher(DiagnosticStatus, 'reference_path_status',
                                                       PATH_STATUS_QOS)
         self._diag_timer = self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)

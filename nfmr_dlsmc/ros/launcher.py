@@ -79,6 +79,8 @@ RUN_TOPICS = {
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
 LONGEST_LOCKSTEP_WAIT = 3600.0  # [s] wall clock a lockstep step waits (--stall-timeout inf)
+#: Longest wall time [s] the bag's count of /clock may stand still short of the sim's steps.
+LAST_STEPS_PATIENCE = 60.0
 
 
 @dataclass(frozen=True)
@@ -251,6 +253,8 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         real_time_factor = _wait_for_run(children, clock, options.duration,
                                          options.stall_timeout, stop,
                                          settings.world.physics_dt)
+        if recorder is not None:
+            _wait_for_the_last_steps(clock, min(options.stall_timeout, LAST_STEPS_PATIENCE))
         # The sim has stopped stepping at the duration: let the last command arrive, then
         # stop the controller (zero speed) well within its odometry timeout, so that a run
         # that ended as planned ends without a safety stop.
@@ -300,6 +304,21 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
     if writer is not None:
         print(bag_dir)
     return status
+
+
+def _wait_for_the_last_steps(clock: ClockWatch, patience: float) -> None:
+    """
+    Spin until the bag holds the /clock message of every step the sim took.
+
+    The sim stands at its ``max_time``, its writers keeping what the recorder has not yet
+    acknowledged; on a busy machine the recorder may be seconds behind, and what it has not
+    received when the sim is stopped would be lost. A warning when the count stands still
+    for ``patience`` [s, wall clock] short of the sim's.
+    """
+    expected = int((clock.sim_stepping or {}).get('steps', 0)) + 1  # and the first, at 0 s
+    if not clock.wait_for_recording('/clock', expected, patience):
+        print(f"\nnfmr-run: warning: the bag holds {clock.recorder.written('/clock')} "
+              f'/clock messages of the {expected} the sim published', file=sys.stderr)
 
 
 def _sim_args(config: Path, options: RunOptions, initial_pose) -> list[str]:
@@ -403,7 +422,9 @@ def _wait_for_run(children: list, clock: ClockWatch, duration: float,
     """
     Spin until the sim reaches ``duration``, showing progress.
 
-    Reached as the sim stops at ``max_time``: within half a physics ``step`` [s] of it.
+    Reached as the sim stops at ``max_time``: within half a physics ``step`` [s] of it, as
+    its status on ``/diagnostics`` says (:class:`ClockWatch`); progress, and a stall, are
+    told from that status and ``/clock``, whichever is newer.
 
     Returns
     -------
@@ -447,7 +468,7 @@ def _wait_for_run(children: list, clock: ClockWatch, duration: float,
                            f'{now - last_progress:.1f} s (--stall-timeout {stall_timeout:g} s); '
                            f'the {sim.name} process stopped stepping; last lines of '
                            f'{sim.log}:\n{sim.tail()}')
-        done = sim_t >= duration - 0.5 * step
+        done = clock.status_time >= duration - 0.5 * step
         if now - last_print > 0.5 or done:
             wall = now - clock.started
             print(f'\rsim {sim_t:7.2f} / {duration:g} s   real-time factor '

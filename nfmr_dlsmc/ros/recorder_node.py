@@ -15,6 +15,7 @@ import queue
 import threading
 
 from nfmr_dlsmc.bag.writer import BagWriter, QosProfile
+from nfmr_dlsmc.ros.qos import STEP_QOS
 from rclpy.clock import Clock as NodeClock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -77,7 +78,9 @@ class RecorderNode(Node):
         reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
         transient = offered and all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL
                                     for q in offered)
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10000,
+        # As deep as the writers of the run's busiest topics (STEP_QOS): an executor seconds
+        # behind loses nothing.
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STEP_QOS.depth,
                          reliability=ReliabilityPolicy.RELIABLE if reliable
                          else ReliabilityPolicy.BEST_EFFORT,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL if transient
@@ -118,6 +121,10 @@ class RecorderNode(Node):
                                 f'{exc.strerror or exc}')
                 continue
             self.received += 1
+
+    def written(self, topic: str) -> int:
+        """Messages of ``topic`` written into the bag so far."""
+        return self.writer.counts.get(topic, 0)
 
     def pending(self) -> int:
         """Messages received but not yet written."""

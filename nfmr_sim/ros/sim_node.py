@@ -53,6 +53,7 @@ from nfmr_dlsmc.core.footprint import Footprint
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.ros.node_main import LoopThread, run_node
 from nfmr_dlsmc.ros.parameters import plain_value, SchemaNode
+from nfmr_dlsmc.ros.qos import recorded_qos
 from nfmr_dlsmc.ros.run_series import SIM_STATUS_NAME
 from nfmr_dlsmc.ros.scene import robot_markers
 from nfmr_sim.command_gate import CommandGate, STEER_TOPIC, TWIST_TOPIC, WHEEL_TOPIC
@@ -106,7 +107,8 @@ class SimNode(SchemaNode):
         self.gate = self._new_gate()
         self._footprint = Footprint.of(world_cfg.chassis, world_cfg.chassis.wheel_width)
         self._odom_covariance = self._covariance_of(world_cfg)
-        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        # Deep enough that a recorder seconds behind still gets every message (STEP_QOS).
+        reliable = recorded_qos(1.0 / world_cfg.physics_dt)
         self._clock_pub = self.create_publisher(Clock, '/clock', reliable)
         self._odom_pub = self.create_publisher(Odometry, 'odom', reliable)
         self._truth_pub = self.create_publisher(Odometry, 'ground_truth', reliable)
@@ -118,8 +120,7 @@ class SimNode(SchemaNode):
                                               reliable)
         self._dist_pub = self.create_publisher(Bool, 'disturbance_active', reliable)
         self._marker_pub = self.create_publisher(
-            MarkerArray, 'robot_markers',
-            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+            MarkerArray, 'robot_markers', recorded_qos(self.settings.marker_rate))
         # Lockstep takes every command (one per step); realtime only the latest, so that a
         # flood of commands is dropped by DDS instead of costing the step thread its time.
         commands = reliable if self.settings.mode == 'lockstep' else QoSProfile(
@@ -147,7 +148,8 @@ class SimNode(SchemaNode):
         self.behind_s, self.slips = 0.0, 0  # realtime: wall time given up, slips (pacer)
         self.waits, self.waited_s = 0, 0.0  # realtime: waits for the controller, their time
         self.brakes = 0  # times the wheels braked for a missing or invalid command
-        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
+                                               recorded_qos(1.0 / STATUS_PERIOD))
         # On the wall clock: the report must come while simulated time stands still too.
         self.create_timer(STATUS_PERIOD, self._publish_status,
                           clock=NodeClock(clock_type=ClockType.STEADY_TIME))
