@@ -23,7 +23,6 @@ from nfmr_dlsmc.core.steering import (
     wheel_commands,
 )
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
 from nfmr_dlsmc.plants.kinematic import check_start, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
 from nfmr_dlsmc.runtime.odometry_wire import sent_time, sent_yaw, sigma_from_variances
@@ -46,10 +45,10 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
 
     With ``session.fusion`` (D33) the session takes, instead of the world's odometry, the
     wheel odometry of the encoders (:class:`~nfmr_sim.encoders.Encoders` at their period,
-    the first at t = 0; :class:`~nfmr_dlsmc.core.wheel_odometry.WheelOdometry` from the
-    origin of its own frame, as a robot's starts) and the world's localisation fixes, as
-    the sim node, ``nfmr-wheel-odometry`` and the controller node pass them over ROS, and
-    it ticks on every step.
+    the first at t = 0, as ``joint_states``:
+    :meth:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession.on_joint_states`) and the
+    world's localisation fixes, as the sim node and the controller node pass them over ROS,
+    and it ticks on every step.
 
     Per physics step k (t_k = k dt, dt = ``world_config.physics_dt``, which must equal the
     control period ``session.params.dlsmc.dt``): the odometry message the world publishes
@@ -113,7 +112,7 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
                              '(localization.rate > 0, e.g. the sensing preset field)')
     per_message = not fused and \
         lockstep_tick_source(noise.odom_rate, noise.odom_latency, dt) == 'odom'
-    wheels_in = _WheelInput(encoders, world_config, params.geometry) if fused else None
+    wheels_in = _WheelInput(encoders, world_config, params.joints) if fused else None
     fix_covariance = np.diag([world_config.localization.position_noise ** 2] * 2
                              + [world_config.localization.yaw_noise ** 2])
     # What a message's covariance says: the variances of the world's odometry noise.
@@ -184,24 +183,22 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
 
 
 class _WheelInput:
-    """The encoders' readings as wheel odometry to a fusing session, at their period."""
+    """The encoders' readings as joint_states to a fusing session, at their period."""
 
-    def __init__(self, config: EncoderConfig | None, world_config: WorldConfig, geometry):
+    def __init__(self, config: EncoderConfig | None, world_config: WorldConfig, joints):
         config = EncoderConfig() if config is None else config
         self._every = config.period_steps(world_config.physics_dt,
                                           SimSettings().aux_publish_every)
         self._encoders = Encoders(config)
-        self._odometry = WheelOdometry(geometry, world_config.tracked_point_offset)
+        self._names = [*joints.steer, *joints.drive]  # the sim's joint order
 
     def offer(self, session: TrackingSession, k: int, out, now: float) -> None:
-        """At every reading's step k, pass the wheel odometry of ``out`` to ``session``."""
+        """At every reading's step k, pass the joint states of ``out`` to ``session``."""
         if k % self._every:
             return
         position, velocity = self._encoders.read(out.time, out.joint_position,
                                                  out.joint_velocity)
-        odometry = self._odometry
-        if odometry.update(now, position[:4], velocity[4:]) is None:
-            session.on_wheel_odometry(*odometry.pose, now, now, now)
+        session.on_joint_states(self._names, position, velocity, now, now, now)
 
 
 def world_rtf(sim_seconds: float) -> dict:

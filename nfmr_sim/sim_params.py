@@ -93,9 +93,10 @@ class SimSettings:
                                 vector('x', 'y', 'yaw'), read_only=True)
     gui: bool = param(False, '', "open pybullet's GUI window instead of the headless client",
                       FLAG, read_only=True)
-    start_after_subscribers: int = param(0, '', 'do not step until odom has this many '
-                                         'subscribers (e.g. controller and recorder), so '
-                                         'that nobody misses the start', at_least(0),
+    start_after_subscribers: int = param(0, '', 'do not step until odom (with '
+                                         'localisation fixes on: localization) has this '
+                                         'many subscribers (e.g. controller and recorder), '
+                                         'so that nobody misses the start', at_least(0),
                                          read_only=True)
     max_time: float = param(0.0, 's', 'stop stepping (the node stays up) at this simulated '
                             'time, until it is raised; 0: never', NON_NEGATIVE)

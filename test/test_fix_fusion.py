@@ -78,6 +78,19 @@ def test_a_fix_newer_than_the_odometry_waits_for_it():
     assert fusion.transform == pytest.approx(T_TRUE, abs=2e-6)
 
 
+def test_fixes_newer_than_the_odometry_wait_each_for_odometry_past_its_own_stamp():
+    # Two fixes ahead of the odometry (a fix source with less latency than the wheels'):
+    # the next odometry covers the first only; the second waits for the one after.
+    fusion = FixFusion(FusionConfig())
+    fusion.on_odometry(0.0, *_odometry(0.0))
+    fusion.on_fix(0.005, *_circle(0.005))
+    fusion.on_fix(0.015, *_circle(0.015))
+    fusion.on_odometry(0.01, *_odometry(0.01))
+    assert fusion.fused == 1
+    fusion.on_odometry(0.02, *_odometry(0.02))
+    assert fusion.fused == 2 and fusion.refused == dict.fromkeys(REFUSALS, 0)
+
+
 def test_an_outlier_is_counted_and_not_fused():
     fusion = FixFusion(FusionConfig())
     for k in range(0, 301):

@@ -205,17 +205,3 @@ def test_a_montecarlo_start_fuses_when_its_task_says_so():
     without_fixes = pybullet_settings(None, 0.001, 'good').world
     with pytest.raises(ParameterError, match='localization.rate > 0'):
         _run_start(task[:7] + (without_fixes,) + task[8:])
-
-
-@pytest.mark.commands
-def test_nfmr_run_refuses_the_field_preset_in_one_line_until_the_node_fuses():
-    import subprocess
-    import sys
-
-    done = subprocess.run([sys.executable, '-m', 'nfmr_dlsmc.cli.run', '--sensing', 'field',
-                           '--no-record'], capture_output=True, text=True, timeout=120)
-    assert done.returncode == 2
-    assert done.stderr.strip().splitlines() == [
-        'nfmr-run: error: --sensing field: nfmr-run does not fuse wheel odometry with '
-        'localisation fixes yet (nfmr-eval, nfmr-tune, nfmr-compare and nfmr-montecarlo '
-        'do, in process)']

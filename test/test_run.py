@@ -411,6 +411,31 @@ def test_a_lockstep_run_with_slow_late_odometry_ticks_every_step(tmp_path):
     assert stamps[0] == 0.0
 
 
+def test_a_field_run_fuses_the_encoders_with_the_fixes(tmp_path):
+    # --sensing field: the controller (fusion.enabled, implied by the preset) takes the
+    # sim's joint_states at 100 Hz and its fixes at 10 Hz instead of odom, and reaches the
+    # path; the bag has both.
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from nfmr_dlsmc.bag.reader import read_bag
+    from sensor_msgs.msg import JointState
+
+    proc = start_run(tmp_path, '--duration', '12', '--no-compare', '--sensing', 'field',
+                     '--hold-from', '10')
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    run_dir = Path(stdout.strip().splitlines()[-1]).parent
+    contents = read_bag(run_dir / 'bag', topics=['/joint_states', '/localization'])
+    joints = [deserialize_message(m.data, JointState) for m in contents.of('/joint_states')]
+    fixes = [deserialize_message(m.data, PoseWithCovarianceStamped)
+             for m in contents.of('/localization')]
+    assert 1195 <= len(joints) <= 1201 and 115 <= len(fixes) <= 120
+    assert {m.header.frame_id for m in fixes} == {'map'}
+    log = (run_dir / 'controller.log').read_text()
+    assert 'not used' not in log and 'stopping the robot' not in log
+    line = next(line for line in stdout.splitlines() if 'hold: distance p99 [m]' in line)
+    assert float(line.split()[-1]) < 0.01
+
+
 def test_the_end_says_how_the_run_kept_its_timing(short_run):
     # In lockstep the loop's periods are on simulated time: 1 kHz exactly, no overrun.
     code, stdout, _ = short_run

@@ -19,7 +19,6 @@ import tempfile
 
 from nfmr_dlsmc.cli.entry import INTERRUPTED_STATUS, take_signals
 from nfmr_dlsmc.core.errors import NfmrError
-from nfmr_dlsmc.core.sensing import SENSING_CONTROLLER
 from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS
 from nfmr_dlsmc.runtime.share import shipped_config
 from nfmr_dlsmc.runtime.user_errors import report_user_error
@@ -378,23 +377,6 @@ def add_steering(parser, pybullet_only: bool = True) -> None:
                         help=('pybullet: ' if pybullet_only else '')
                         + "the steer motors' lag and rate limit from a preset instead of "
                         f"the file's sim section (doc/steering.md): {presets}")
-
-
-def check_unfused_sensing(sensing: str | None, command: str) -> None:
-    """
-    Refuse a sensing preset whose controller fuses sources, for a command that cannot.
-
-    Raises
-    ------
-    UsageError
-        ``sensing`` is ``field`` (:data:`~nfmr_dlsmc.core.sensing.SENSING_CONTROLLER`):
-        ``command`` would run its controller on the ``odom`` topic instead.
-
-    """
-    if sensing in SENSING_CONTROLLER:
-        raise UsageError(f'--sensing {sensing}: {command} does not fuse wheel odometry with '
-                         'localisation fixes yet (nfmr-eval, nfmr-tune, nfmr-compare and '
-                         'nfmr-montecarlo do, in process)')
 
 
 @contextmanager

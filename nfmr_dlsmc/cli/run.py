@@ -13,7 +13,6 @@ import sys
 from nfmr_dlsmc.cli.common import (
     add_steering,
     check_ros_log_folder,
-    check_unfused_sensing,
     check_writable,
     OneLineParser,
     run_command,
@@ -40,7 +39,8 @@ def _parser() -> argparse.ArgumentParser:
                              'reaches the run)')
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="the robot's odometry from a preset instead of the file's sim "
-                             'section (ideal, good, harsh); metrics are of the ground truth')
+                             'section (ideal, good, harsh, field: wheel odometry and fixes '
+                             'fused); metrics are of the ground truth')
     add_steering(parser, pybullet_only=False)
     parser.add_argument('--duration', type=float, default=None,
                         help='simulated time [s] (default: 100, or with a path its own '
@@ -80,7 +80,6 @@ def _run(args) -> int:
         raise UsageError(f'--duration must be a finite number > 0 [s], got {args.duration}')
     if not args.stall_timeout > 0.0:
         raise UsageError(f'--stall-timeout must be > 0, got {args.stall_timeout}')
-    check_unfused_sensing(args.sensing, 'nfmr-run')
     if args.hold_from is not None and not args.hold_from >= 0.0:
         raise UsageError(f'--hold-from must be >= 0, got {args.hold_from}')
     if args.animate and args.no_record:

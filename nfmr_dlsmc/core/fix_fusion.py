@@ -49,6 +49,7 @@ from nfmr_dlsmc.core.schema import (
     FLAG,
     non_empty,
     NON_NEGATIVE,
+    one_of,
     param,
     POSITIVE,
 )
@@ -66,16 +67,22 @@ class FusionConfig:
     """
     Fuse wheel odometry (the motion) with absolute fixes (the map); off: odometry as it is.
 
-    With ``enabled`` the controller takes ``wheel_odom`` (nav_msgs/Odometry of P in the
-    ``odom`` frame, e.g. from ``nfmr-wheel-odometry``) and ``localization``
-    (geometry_msgs/PoseWithCovarianceStamped of P in ``fix_frame``) instead of ``odom``, and
-    tracks in the map frame (doc/design.md, D33).
+    With ``enabled`` the controller takes the wheel odometry (``joint_states`` of the
+    encoders, or ``wheel_odom``: nav_msgs/Odometry of P in the ``odom`` frame, e.g. from
+    ``nfmr-wheel-odometry``) and ``localization`` (geometry_msgs/PoseWithCovarianceStamped
+    of P in ``fix_frame``) instead of ``odom``, and tracks in the map frame (doc/design.md,
+    D33).
     """
 
     prefix: ClassVar[str] = 'fusion'
 
     enabled: bool = param(False, '', 'fuse wheel odometry and localisation fixes (D33) '
                           'instead of taking one odometry stream', FLAG, read_only=True)
+    wheel_input: str = param('joint_states', '', 'where the wheel odometry comes from: '
+                             'joint_states, computed in the controller from the encoders '
+                             '(joints.* name them), or wheel_odom, nav_msgs/Odometry of P '
+                             'from a node of its own (e.g. nfmr-wheel-odometry)',
+                             one_of('joint_states', 'wheel_odom'), read_only=True)
     fix_frame: str = param('map', '', 'frame the fixes must be in; others are refused and '
                            'counted', non_empty('a frame name', 256), read_only=True)
     fix_position_noise: float = param(0.01, 'm', 'standard deviation of a fix position '
@@ -191,7 +198,8 @@ class FixFusion:
         Take a wheel odometry pose of P [m, m, rad] (odom frame) true at ``stamp`` [s].
 
         Returns False, keeping nothing, for a stamp not after the latest or a pose not
-        finite. Fixes waiting for odometry up to their stamp are fused now.
+        finite. Fixes waiting for odometry up to their stamp are fused now; those stamped
+        after it wait on.
         """
         stamp = float(stamp)
         if not all(math.isfinite(v) for v in (stamp, x, y, theta)) or \
@@ -209,8 +217,9 @@ class FixFusion:
         old = bisect_left(self._stamps, horizon) - 1  # keep one at or before the horizon
         if old > 0:
             del self._stamps[:old], self._odom[:old], self._travel[:old]
-        pending, self._pending = self._pending, []
-        for fix in pending:
+        covered = [fix for fix in self._pending if fix[0] <= stamp]
+        self._pending = [fix for fix in self._pending if fix[0] > stamp]
+        for fix in covered:
             self._take(*fix)
         return True
 

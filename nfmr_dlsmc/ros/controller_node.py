@@ -65,13 +65,14 @@ made up (why not a thread waking on each ``/clock``: doc/performance.md).
 
 from contextlib import contextmanager
 import math
+import re
 import sys
 import threading
 import time
 import traceback
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Twist, TwistStamped
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from nfmr_dlsmc.core.angles import yaw_from_quaternion
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES
@@ -99,6 +100,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from visualization_msgs.msg import MarkerArray
 
@@ -111,6 +113,8 @@ PATH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 PATH_IN_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 #: Answers to paths from outside: reliable, volatile, a few kept for a slow reader.
 PATH_STATUS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+#: Localisation fixes (10-20 Hz): reliable, a second of them kept for a busy moment.
+FIX_QOS = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE)
 PATH_STEP = 0.05  # [s] time between poses of reference_path
 MAX_PATH_POSES = 20001  # beyond PATH_STEP * (MAX_PATH_POSES - 1) s the poses spread evenly
 MARKER_PERIOD = 0.05  # [s] of the node clock: robot_markers at 20 Hz
@@ -196,7 +200,7 @@ class ControllerNode(SchemaLifecycleNode):
         self._lock = threading.Lock()
         self._active = False  # whether odometry is taken and commands are published
         self._publishers_of_session = []
-        self._odom_sub = None  # while active
+        self._odom_subs = []  # while active: odom, or wheel_odom and localization (fusion)
         self._path_sub = None  # while active
         self._arrival = 0.0  # the arrival outcome of the latest tick
         self._clock_sub = None  # while active with tick_source sim_clock
@@ -314,8 +318,18 @@ class ControllerNode(SchemaLifecycleNode):
                 self._active = True
             result = super().on_activate(state)  # the lifecycle publishers publish from here
             self._publish_path()
-            self._odom_sub = self._inputs.create_subscription(Odometry, 'odom', self._on_odom,
-                                                              COMMAND_QOS)
+            if self.session.fusion is None:
+                self._odom_subs = [self._inputs.create_subscription(
+                    Odometry, 'odom', self._on_odom, COMMAND_QOS)]
+            else:  # D33: the wheels' odometry placed in the map by the fixes
+                self._fix_refusals, self._joint_refusals = set(), set()
+                wheels = (self._inputs.create_subscription(
+                    JointState, 'joint_states', self._on_joint_states, COMMAND_QOS)
+                    if self.session.params.fusion.wheel_input == 'joint_states' else
+                    self._inputs.create_subscription(Odometry, 'wheel_odom',
+                                                     self._on_wheel_odom, COMMAND_QOS))
+                self._odom_subs = [wheels, self._inputs.create_subscription(
+                    PoseWithCovarianceStamped, 'localization', self._on_fix, FIX_QOS)]
             self._path_sub = self.create_subscription(Path, 'reference_path_in',
                                                       self._on_path, PATH_IN_QOS)
             if values['tick_source'] == 'sim_clock':
@@ -383,11 +397,12 @@ class ControllerNode(SchemaLifecycleNode):
         self.get_logger().info('inactive: zero speed commanded once, no further commands')
 
     def _drop_active_entities(self) -> None:
-        for node, subscription in ((self._inputs, self._odom_sub), (self._inputs, self._clock_sub),
-                                   (self, self._path_sub)):
+        for node, subscription in ((self._inputs, self._clock_sub), (self, self._path_sub),
+                                   *((self._inputs, sub) for sub in self._odom_subs)):
             if subscription is not None:
                 node.destroy_subscription(subscription)
-        self._odom_sub = self._clock_sub = self._path_sub = None
+        self._clock_sub = self._path_sub = None
+        self._odom_subs = []
         if self._clock_jump is not None:
             self._clock_jump.unregister()
             self._clock_jump = None
@@ -429,21 +444,73 @@ class ControllerNode(SchemaLifecycleNode):
     # -- ticks ------------------------------------------------------------------------------
 
     def _on_odom(self, msg: Odometry) -> None:
+        covariance = msg.pose.covariance
+        self._take_odometry(msg, sigma_from_variances(covariance[0], covariance[7],
+                                                      covariance[35]))
+
+    def _on_wheel_odom(self, msg: Odometry) -> None:
+        self._take_odometry(msg, None, wheels=True)
+
+    def _on_joint_states(self, msg: JointState) -> None:
+        """Integrate the encoders' odometry (D33); a message it cannot use, logged once."""
+        stamp = stamp_seconds(msg.header.stamp.sec, msg.header.stamp.nanosec)
+        wall = max(self._now(), stamp) if self._ages_on_sim_time() else time.monotonic()
+        control = self._now() if self._values['tick_source'] == 'clock' else stamp
+        with self._lock:
+            if not self._active:
+                return
+            refused = self.session.on_joint_states(msg.name, msg.position, msg.velocity,
+                                                   wall, control, stamp)
+        kind = None if refused is None else re.sub(r'[-+0-9.e]+', '#', refused)
+        if kind is not None and kind not in self._joint_refusals:
+            self._joint_refusals.add(kind)
+            self.get_logger().warning(f'joint_states stamped {stamp:.3f} s not used: '
+                                      f'{refused}; further ones like it not logged')
+
+    def _on_fix(self, msg: PoseWithCovarianceStamped) -> None:
+        """Fuse a localisation fix (D33); a refused one is logged once per reason."""
+        p = msg.pose.pose
+        stamp = stamp_seconds(msg.header.stamp.sec, msg.header.stamp.nanosec)
+        c = msg.pose.covariance  # 6x6 row-major: x, y, z, roll, pitch, yaw
+        covariance = (None if not any(c) else
+                      [[c[0], c[1], c[5]], [c[6], c[7], c[11]], [c[30], c[31], c[35]]])
+        wall = max(self._now(), stamp) if self._ages_on_sim_time() else time.monotonic()
+        with self._lock:
+            if not self._active:
+                return
+            verdict = self.session.on_fix(
+                p.position.x, p.position.y,
+                yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
+                                    p.orientation.w), wall, self._now(), stamp,
+                msg.header.frame_id, covariance)
+        if verdict.reason is not None and verdict.reason not in self._fix_refusals:
+            self._fix_refusals.add(verdict.reason)
+            self.get_logger().warning(
+                f'localisation fix stamped {stamp:.3f} s refused ({verdict.reason}'
+                + (f', {verdict.distance:.1f} sigma off' if verdict.reason == 'outlier'
+                   else '') + '): not fused; counted on /diagnostics, further refusals '
+                'for this reason not logged')
+
+    def _take_odometry(self, msg: Odometry, sigma, wheels: bool = False) -> None:
+        """Give the session an odometry message (the wheels' with fusion) and tick on it."""
         p = msg.pose.pose
         stamp = stamp_seconds(msg.header.stamp.sec, msg.header.stamp.nanosec)
         source = self._values['tick_source']
         wall = max(self._now(), stamp) if self._ages_on_sim_time() else time.monotonic()
-        covariance = msg.pose.covariance
-        sigma = sigma_from_variances(covariance[0], covariance[7], covariance[35])
+        yaw = yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
+                                  p.orientation.w)
+        control = self._now() if source == 'clock' else stamp
         with self._lock:
             if not self._active:
                 return
-            accepted = self.session.on_odometry(
-                p.position.x, p.position.y,
-                yaw_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z,
-                                    p.orientation.w), wall,
-                self._now() if source == 'clock' else stamp, stamp, msg.header.frame_id,
-                sigma)
+            if wheels:
+                accepted = self.session.on_wheel_odometry(
+                    p.position.x, p.position.y, yaw, wall, control, stamp,
+                    msg.header.frame_id)
+            else:
+                accepted = self.session.on_odometry(p.position.x, p.position.y, yaw, wall,
+                                                    control, stamp, msg.header.frame_id,
+                                                    sigma)
         if source == 'odom' and accepted:
             self._tick(stamp)
         elif source == 'clock' and not self._control_clock.ros_time_is_active:
@@ -673,6 +740,12 @@ class ControllerNode(SchemaLifecycleNode):
                 ('period_p99_ms', figures.period_p99_ms), ('period_max_ms', figures.period_max_ms),
                 ('overruns', figures.overruns), ('compute_p99_us', figures.compute_p99_us),
                 ('ticks', figures.ticks))]
+        fusion = self.session.fusion if lifecycle == 'active' else None
+        if fusion is not None:  # D33: what became of the fixes
+            with self._lock:
+                counts = [('fixes_fused', fusion.fused), ('fusion_restarts', fusion.restarts),
+                          *((f'fixes_refused_{k}', v) for k, v in fusion.refused.items())]
+            status.values += [KeyValue(key=k, value=str(v)) for k, v in counts]
         if lifecycle == 'active' and hasattr(self.session.params.trajectory, 'end_pose'):
             outcome = ARRIVAL_OUTCOMES[self._arrival]
             status.values.append(KeyValue(key='arrival', value=outcome))

@@ -27,7 +27,7 @@ from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.analysis.run_metrics import run_timing
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
-from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_sensing
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS, with_controller_sensing, with_sensing
 from nfmr_dlsmc.core.steering import geometry_mismatch
 from nfmr_dlsmc.core.steering_presets import (
     declared_steering_note,
@@ -75,6 +75,7 @@ RUN_TOPICS = {
     '/reference_path': 'nav_msgs/msg/Path',
     '/reference_path_status': 'diagnostic_msgs/msg/DiagnosticStatus',
     '/robot_markers': 'visualization_msgs/msg/MarkerArray',
+    '/localization': 'geometry_msgs/msg/PoseWithCovarianceStamped',
 }
 #: Topics of RUN_TOPICS offered transient local: recorded once discovered (RecorderNode).
 LATCHED_TOPICS = ('/reference_path',)
@@ -165,14 +166,14 @@ def run(options: RunOptions) -> int:
     if options.path is not None:
         options = replace(options, path=path_file(str(options.path)).absolute())
         controller_flat |= path_values(options.path)
-    params = controller_params(controller_flat)
+    sim_flat = load_params_file(config, 'sim')
+    params = controller_params(controller_flat | _implied_by_sensing(config, options))
     if options.hold_from is None:  # a path's run settles sooner than the paper's 15 s
         options = replace(options, hold_from=PATH_HOLD_FROM if hasattr(
             params.trajectory, 'end_pose') else HOLD_FROM)
     if options.duration is None:  # a path's own (to the next 0.1 s), else the paper's
         duration = getattr(params.trajectory, 'duration', PAPER_DURATION - PATH_MARGIN)
         options = replace(options, duration=math.ceil(10.0 * (duration + PATH_MARGIN)) / 10.0)
-    sim_flat = load_params_file(config, 'sim')
     if options.path is not None:
         sim_flat['initial_pose'] = list(params.trajectory.start_pose)
     if options.sensing is not None:
@@ -193,6 +194,14 @@ def run(options: RunOptions) -> int:
                              f'period ({params.dlsmc.dt:g} s)', 's')
     odometry = settings.world.disturbance
     check_odometry_timing(odometry.odom_rate, odometry.odom_latency, controller_flat)
+    if params.fusion.enabled and settings.world.fix_period_steps is None:
+        raise ParameterError('fusion.enabled', True, 'needs localisation fixes from the sim '
+                             '(localization.rate > 0, e.g. --sensing field)')
+    if params.fusion.enabled and params.fusion.wheel_input != 'joint_states':
+        raise ParameterError('fusion.wheel_input', params.fusion.wheel_input, 'must be '
+                             "joint_states in nfmr-run: the controller takes the sim's "
+                             'encoders itself, in lockstep (a wheel odometry node of its '
+                             'own would run behind the steps)')
     reservation = reserve_domain(options.domain)
     try:
         return _run(options, config, params, settings, reservation)
@@ -244,9 +253,11 @@ def _run_on_domain(options: RunOptions, config: Path, params, settings, domain: 
         children = [start_child('sim', 'nfmr_sim.ros.sim_node',
                                 _sim_args(config, options, settings.initial_pose), run_dir),
                     start_child('controller', 'nfmr_dlsmc.ros.controller_node',
-                                _controller_args(config, options, settings.world), run_dir)]
+                                _controller_args(config, options, settings.world,
+                                                 params.fusion.enabled), run_dir)]
         controller = ControllerLifecycle(lifecycle, clock, children, stop)
-        # The sim starts stepping once the controller subscribes to odometry: when active.
+        # The sim starts stepping once the controller subscribes to odometry (with fusion:
+        # to the fixes, and to joint_states before them): when active.
         controller.wait_until_up()
         controller.change('configure')
         controller.change('activate')
@@ -370,7 +381,20 @@ def _steering_args(preset: str | None) -> list[str]:
     return [arg for value in ["steer_motors:=''", *values] for arg in ('-p', value)]
 
 
-def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
+def _implied_by_sensing(config: Path, options: RunOptions) -> dict:
+    """
+    Return the controller parameters the run's sensing preset implies and the file omits.
+
+    The preset of ``--sensing``, else the file's ``sim.sensing``: ``field`` turns
+    ``fusion.enabled`` on (:data:`~nfmr_dlsmc.core.sensing.SENSING_CONTROLLER`).
+    """
+    preset = options.sensing or load_params_file(config, 'sim').get('sensing')
+    controller_flat = load_params_file(config, 'controller')
+    return {k: v for k, v in with_controller_sensing({}, preset).items()
+            if k not in controller_flat}
+
+
+def _controller_args(config: Path, options: RunOptions, world, fused: bool) -> list[str]:
     """Return the controller's ROS arguments: no autostart, the path over the run."""
     # On the sim's time in both modes: the trajectory runs on simulated time, so a sim
     # slower than real time slows the run down instead of breaking it.
@@ -378,12 +402,15 @@ def _controller_args(config: Path, options: RunOptions, world) -> list[str]:
             '-p', f'path_horizon:={float(options.duration)!r}', '-p', 'use_sim_time:=true',
             *(arg for key, value in (path_values(options.path).items()
                                      if options.path is not None else ())
-              for arg in ('-p', f'{key}:={value}'))]
+              for arg in ('-p', f'{key}:={value}')),
+            *(arg for key, value in _implied_by_sensing(config, options).items()
+              for arg in ('-p', f'{key}:={str(value).lower()}'))]
     if options.mode == 'realtime':
         return [*args, '-p', 'tick_source:=clock']
     # Odometry ages on simulated time, so a slow step on a busy machine is no fault.
     odometry = world.disturbance
-    source = lockstep_tick_source(odometry.odom_rate, odometry.odom_latency, world.physics_dt)
+    source = ('sim_clock' if fused else  # wheel odometry at the encoders' rate
+              lockstep_tick_source(odometry.odom_rate, odometry.odom_latency, world.physics_dt))
     return [*args, '-p', f'tick_source:={source}']
 
 

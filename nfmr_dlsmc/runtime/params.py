@@ -56,6 +56,7 @@ from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
 from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime import ros_yaml
+from nfmr_dlsmc.runtime.joint_states import WheelJoints
 from nfmr_dlsmc.runtime.path_files import load_path_trajectory
 from nfmr_dlsmc.runtime.share import shipped_config
 import yaml
@@ -101,6 +102,8 @@ class ControllerParams:
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     #: Wheel odometry corrected by localisation fixes instead of one odometry stream (D33).
     fusion: FusionConfig = field(default_factory=FusionConfig)
+    #: The encoders' joint names in joint_states (fusion from joint_states).
+    joints: WheelJoints = field(default_factory=WheelJoints)
     #: How a path's points become a reference: the file's, or one received by the node.
     path_profile: PathProfile = field(default_factory=lambda: PathProfile(
         omega_max=InputLimits().omega_max, v_max=InputLimits().v_max))
@@ -359,7 +362,7 @@ def controller_parameters() -> list[Param]:
     return [_CONTROL_RATE, *law, *params_of(OuterLoopGains), *params_of(InnerLoopGains),
             *params_of(InputLimits), *params_of(RobotGeometry), *_trajectory_parameters(),
             *params_of(SteerMode), *params_of(EstimatorConfig), *params_of(FusionConfig),
-            *params_of(NodeOptions)]
+            *params_of(WheelJoints), *params_of(NodeOptions)]
 
 
 def controller_parameter_defaults() -> dict:
@@ -412,6 +415,7 @@ def controller_params(flat: dict) -> ControllerParams:
                             geometry=from_flat(RobotGeometry, flat),
                             estimator=from_flat(EstimatorConfig, flat),
                             fusion=from_flat(FusionConfig, flat),
+                            joints=from_flat(WheelJoints, flat),
                             path_profile=path_profile,
                             arrival=arrival)
 

@@ -25,6 +25,8 @@ from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
+from nfmr_dlsmc.runtime.joint_states import wheel_sample
 from nfmr_dlsmc.runtime.odometry_gate import OdometryGate, OdometryRules
 from nfmr_dlsmc.runtime.params import ControllerParams, PATH
 import numpy as np
@@ -166,6 +168,9 @@ class TrackingSession:
         self._outcome = 0.0  # the arrival outcome last reported
         self.estimator = PoseEstimator(params.estimator) if params.estimator.enabled else None
         self.fusion = FixFusion(params.fusion) if params.fusion.enabled else None
+        # The encoders' odometry, when the session computes it from joint_states.
+        self._wheels = WheelOdometry(params.geometry, params.steering.zero_slip_offset(
+            params.geometry.wheelbase)) if params.fusion.enabled else None
         self.restarts = 0
         self._t0 = None  # control time [s] of the first valid odometry
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
@@ -332,6 +337,35 @@ class TrackingSession:
         if placed is None:
             return False
         return self.on_odometry(*placed[1:], wall_time, control_time, stamp)
+
+    def on_joint_states(self, names, positions, velocities, wall_time: float,
+                        control_time: float, stamp: float) -> str | None:
+        """
+        Take one joint_states message of the encoders (``fusion`` on): its wheel odometry.
+
+        The steer angles and drive speeds of ``params.joints``
+        (:func:`~nfmr_dlsmc.runtime.joint_states.wheel_sample`) integrated to the pose of P
+        (:class:`~nfmr_dlsmc.core.wheel_odometry.WheelOdometry`, from the origin of the
+        odometry frame) and taken by :meth:`on_wheel_odometry`; stamps more than
+        ``restart_threshold`` older than the last start the odometry over.
+
+        Returns
+        -------
+        str or None
+            Why the message was not used (a joint missing, arrays of other lengths, a value
+            not finite, a stamp not after the last one); None when it was.
+
+        """
+        sample = wheel_sample(names, positions, velocities, self.params.joints)
+        if isinstance(sample, str):
+            return sample
+        last = self._wheels.stamp
+        if last is not None and stamp <= last - self.gate.rules.restart_threshold:
+            self._wheels.reset()  # the encoders' clock started over
+        refused = self._wheels.update(stamp, *sample)
+        if refused is None:
+            self.on_wheel_odometry(*self._wheels.pose, wall_time, control_time, stamp)
+        return refused
 
     def on_fix(self, x: float, y: float, theta: float, wall_time: float,
                control_time: float, stamp: float, frame_id: str | None = None,

@@ -264,11 +264,16 @@ class SimNode(SchemaNode):
     def _loop(self) -> None:
         s = self.settings
         if s.start_after_subscribers:
-            self.get_logger().info(f'waiting for {s.start_after_subscribers} odom subscribers')
+            # With fixes, a controller that fuses takes them (and wheel odometry), not odom.
+            fixes = s.world.fix_period_steps is not None
+            topic, publisher = (('localization', self._fix_pub) if fixes
+                                else ('odom', self._odom_pub))
+            self.get_logger().info(f'waiting for {s.start_after_subscribers} {topic} '
+                                   'subscribers')
             # Matched by the publisher itself, not only seen in the graph: the first message
             # then reaches them.
             while self._stepper.running.is_set() and (
-                    self._odom_pub.get_subscription_count() < s.start_after_subscribers):
+                    publisher.get_subscription_count() < s.start_after_subscribers):
                 time.sleep(0.01)
         with self._control:
             self._hold_while_paused()
