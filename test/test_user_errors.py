@@ -27,6 +27,8 @@ def _write(path: Path, text: str) -> Path:
     return path
 
 
+FUSED_WITHOUT_FIXES = ('controller:\n  ros__parameters:\n    fusion:\n      enabled: true\n'
+                       'sim:\n  ros__parameters:\n    sensing: good\n')
 #: (executable, its arguments given the test's folder, a text the one line must hold).
 CASES = [
     ('nfmr-eval', lambda d: ['--params', str(d / 'missing.yaml')],
@@ -87,6 +89,10 @@ CASES = [
      '--duration must be a finite number > 0'),
     ('nfmr-run', lambda d: ['--duration', '1e-9', '--out', str(d / 'runs')],
      'must be at least one control period'),
+    # A controller that fuses fixes (D33) on a sim that gives none.
+    ('nfmr-run', lambda d: [str(_write(d / 'fused.yaml', FUSED_WITHOUT_FIXES)), '--out',
+                            str(d / 'runs')],
+     'fusion.enabled = True: needs localisation fixes from the sim'),
     # Outputs that cannot be written: refused before anything starts.
     ('nfmr-run', lambda d: ['--out', str(_write(d / 'runs', ''))],
      '--out {d}/runs: is a file, expected a folder'),
