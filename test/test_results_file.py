@@ -154,6 +154,16 @@ def test_an_unknown_figure_or_one_the_file_lacks_is_refused(tmp_path, monkeypatc
     assert out.read_text() == render([])
 
 
+def test_help_measures_nothing_and_an_option_is_no_file_name(tmp_path, monkeypatch, capsys):
+    # `--help` once measured every figure and wrote them to a file named '--help'.
+    monkeypatch.chdir(tmp_path)
+    assert main(['--help']) == 0
+    assert 'usage:' in capsys.readouterr().out
+    assert main(['--out', 'x.md']) == 2
+    assert 'usage:' in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.slow
 @pytest.mark.commands
 def test_the_kinematic_figures_measure_as_the_results_file_says():

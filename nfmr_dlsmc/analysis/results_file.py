@@ -363,9 +363,13 @@ def quotes(text: str) -> list:
 def main(argv=None) -> int:
     """Measure the figures and write the results file named in ``argv``; return the status."""
     args = sys.argv[1:] if argv is None else argv
-    if not args:
-        print('usage: python -m nfmr_dlsmc.analysis.results_file OUT.md [NAME ...]',
-              file=sys.stderr)
+    usage = 'usage: python -m nfmr_dlsmc.analysis.results_file OUT.md [NAME ...]'
+    if args and args[0] in ('-h', '--help'):
+        print(f'{usage}\n\nMeasure the figures NAME (all without one) and write OUT.md; '
+              f"the names: {', '.join(f.name for f in FIGURES)}")
+        return 0
+    if not args or args[0].startswith('-'):
+        print(usage, file=sys.stderr)
         return 2
     out, names = Path(args[0]), set(args[1:])
     unknown = names - {figure.name for figure in FIGURES}
