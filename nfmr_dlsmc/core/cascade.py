@@ -6,7 +6,41 @@ from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.gains import InputLimits
 from nfmr_dlsmc.core.saturation import saturate_speed, saturate_yaw_rate, SaturatedController
 
-__all__ = ['CascadeController']
+__all__ = ['CascadeController', 'smoothed_yaw_rate']
+
+
+def smoothed_yaw_rate(previous: float, omega: float, s: float, tau: float, band: float,
+                      dt: float) -> float:
+    """
+    Return the commanded yaw rate after the fading low-pass of ``omega_filter`` [rad/s].
+
+    A first-order low-pass of the saturated omega whose time constant fades out with the
+    heading error (robot option, doc/design.md, D14):
+
+        tau' = tau (1 - |s| / band),
+        omega_k = omega_{k-1} + dt / (tau' + dt) (omega - omega_{k-1})   if tau' > 0,
+        omega_k = omega                                                    otherwise.
+
+    Parameters
+    ----------
+    previous : float
+        omega_{k-1}, the yaw rate commanded at the last step [rad/s].
+    omega : float
+        The saturated yaw rate of this step [rad/s].
+    s : float
+        The attitude sliding variable, the heading error [rad].
+    tau : float
+        ``omega_filter`` [s], > 0.
+    band : float
+        ``omega_filter_band`` [rad]: the |s| at which the filter has faded out.
+    dt : float
+        The time since the last step [s].
+
+    """
+    tau = tau * (1.0 - abs(s) / band)
+    if tau > 0.0:
+        return previous + dt / (tau + dt) * (omega - previous)
+    return omega
 
 
 class CascadeController(SaturatedController):
@@ -44,7 +78,7 @@ class CascadeController(SaturatedController):
        they do not wind up while the robot turns;
     6. optionally (``omega_tau`` > 0) a first-order low-pass of omega from the second step
        on, time constant ``omega_tau`` (1 - abs(s_theta) / ``omega_band``) [s] (none from
-       abs(s_theta) >= ``omega_band`` [rad] on).
+       abs(s_theta) >= ``omega_band`` [rad] on; :func:`smoothed_yaw_rate`).
 
     The outer loop exposes ``s_x`` and ``s_y`` (its sliding variables) after a step.
 
@@ -164,12 +198,9 @@ class CascadeController(SaturatedController):
         omega = saturate_yaw_rate(omega_raw, limits)
         self.v_saturated = v != v_want
         self.omega_saturated = omega != omega_raw
-        if self._omega_tau > 0.0 and self._omega is not None:
-            # First-order low-pass of the saturated omega, its time constant fading out with
-            # abs(s_theta); the first step takes omega as is.
-            tau = self._omega_tau * (1.0 - abs(s_theta) / self._omega_band)
-            if tau > 0.0:
-                omega = self._omega + dt / (tau + dt) * (omega - self._omega)
+        if self._omega_tau > 0.0 and self._omega is not None:  # the first step: as is
+            omega = smoothed_yaw_rate(self._omega, omega, s_theta, self._omega_tau,
+                                      self._omega_band, dt)
         self._omega = omega
         self.x_e, self.y_e = x_e, y_e
         self.theta_d, self.thetadot_d, self.s_theta = theta_d, thetadot_d, s_theta
