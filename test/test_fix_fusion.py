@@ -69,7 +69,7 @@ def test_a_fix_newer_than_the_odometry_waits_for_it():
     fusion.on_odometry(0.0, *_odometry(0.0))
     fusion.on_odometry(0.01, *_odometry(0.01))
     verdict = fusion.on_fix(0.015, *_circle(0.015))
-    assert not verdict.fused and verdict.reason is None and math.isnan(verdict.distance)
+    assert verdict.fused is False and verdict.reason is None and math.isnan(verdict.distance)
     assert not fusion.ready
     fusion.on_odometry(0.02, *_odometry(0.02))
     assert fusion.ready and fusion.fused == 1
@@ -159,7 +159,7 @@ def test_a_bad_fix_is_refused_with_its_reason_and_changes_nothing(kwargs, reason
     before = (fusion.transform, fusion.covariance().copy(), fusion.fused)
     fix = dict(zip(('stamp', 'x', 'y', 'theta'), (1.0, *_circle(1.0))))
     verdict = fusion.on_fix(**{**fix, **kwargs})
-    assert not verdict.fused and verdict.reason == reason
+    assert verdict.fused is False and verdict.reason == reason
     assert fusion.refused == {r: int(r == reason) for r in REFUSALS}
     assert fusion.transform == before[0] and fusion.fused == before[2]
     np.testing.assert_array_equal(fusion.covariance(), before[1])
@@ -250,3 +250,108 @@ def test_noisy_fixes_and_drifting_odometry_give_a_smooth_pose_within_millimetres
 def test_invalid_settings_are_refused_naming_the_parameter(name, value):
     with pytest.raises(ParameterError, match=f'fusion.{name}'):
         FusionConfig(**{name: value})
+
+
+def _no_information(fusion, stamp):
+    """Fuse a fix that says nothing (variance 1e12): only the prediction shows in P."""
+    pose = fusion.pose()
+    fusion.on_fix(stamp, *pose[1:], covariance=np.diag([1e12, 1e12, 1e12]))
+
+
+@pytest.mark.parametrize('dy, dt', [(0.0, 2.0), (0.5, 1.0)])
+def test_the_covariance_grows_by_the_drift_of_the_travel_and_the_time_exactly(dy, dt):
+    # (F2) seen at P: H G = I, so the covariance of P's map pose grows by Q itself,
+    # q = q_p^2 d + w_p^2 dt on x and y, q_yaw^2 d + w_yaw^2 dt on the yaw; the travel is
+    # interpolated to the fix's stamp (half way: d / 2) and counts y as well as x.
+    config = FusionConfig(drift_per_metre=0.003, yaw_drift_per_metre=0.007,
+                          drift_per_second=0.0011, yaw_drift_per_second=0.0013)
+    fusion = FixFusion(config)
+    fusion.on_odometry(0.0, 3.0, 1.0, 0.2)
+    fusion.on_fix(0.0, 1.0, 2.0, 0.5, covariance=np.diag([1e-6, 1e-6, 1e-6]))
+    before = fusion.covariance()
+    fusion.on_odometry(0.5 * dt, 3.0, 1.0 + 0.5 * dy, 0.2)
+    fusion.on_odometry(2.0 * dt, 3.0, 1.0 + 2.0 * dy, 0.2)
+    _no_information(fusion, dt)  # a third of the way from the second sample: travel dy
+    grown = fusion.covariance() - before
+    q_p = 0.003 ** 2 * dy + 0.0011 ** 2 * dt
+    q_yaw = 0.007 ** 2 * dy + 0.0013 ** 2 * dt
+    # covariance() is of the latest pose, 2 dy on along the odometry's y (turned by the
+    # map's 0.3 rad): the first fix's yaw variance acts over 2 dy, the walk's over dy.
+
+    def moved(cov, arm):
+        c, s = math.cos(0.3), math.sin(0.3)
+        J = np.array([[1.0, 0.0, -c * arm], [0.0, 1.0, -s * arm], [0.0, 0.0, 1.0]])
+        return J @ cov @ J.T
+
+    expected = (moved(np.diag([1e-6, 1e-6, 1e-6]), 2.0 * dy)
+                + moved(np.diag([q_p, q_p, q_yaw]), dy) - before)
+    np.testing.assert_allclose(grown, expected, rtol=1e-6, atol=1e-15)
+
+
+def test_a_fixs_distance_is_its_mahalanobis_distance_and_the_gate_its_square():
+    fusion = FixFusion(FusionConfig())
+    fusion.on_odometry(0.0, 0.0, 0.0, 0.0)
+    first = fusion.on_fix(0.0, 1.0, 2.0, 0.0, covariance=np.diag([1e-4, 1e-4, 1e-4]))
+    assert first.fused is True and first.distance == 0.0
+    # Standing still (P grows only by the walk per second, nothing in 0 s): S = 2 R.
+    R = np.diag([1e-4, 1e-4, 1e-4])
+    close = fusion.on_fix(0.0, 1.0 + 0.001, 2.0, 0.0, covariance=R)
+    assert close.fused is True
+    assert close.distance == pytest.approx(0.001 / math.sqrt(2e-4), rel=1e-9)  # 0.0707
+    # 5 sigma of S: beyond the gate of 16.3 on the square (sqrt 4.04), not on the root.
+    fusion = FixFusion(FusionConfig())
+    fusion.on_odometry(0.0, 0.0, 0.0, 0.0)
+    fusion.on_fix(0.0, 1.0, 2.0, 0.0, covariance=R)
+    far = fusion.on_fix(0.0, 1.0 + 5.0 * math.sqrt(2e-4), 2.0, 0.0, covariance=R)
+    assert far.fused is False and far.reason == 'outlier'
+    assert far.distance == pytest.approx(5.0, rel=1e-9)
+
+
+@pytest.mark.parametrize('covariance', [
+    np.array([[1e-4, 1e-9, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]]),  # 1e-9 asymmetric
+    np.array([[1e-4, 1e-4 * (1 + 1e-6), 0.0], [1e-4, 2e-4, 0.0], [0.0, 0.0, 1e-4]]),
+    np.diag([1e-4, 1e-4, 0.0]),  # singular: no yaw noise at all is no covariance
+])
+def test_a_covariance_nearly_symmetric_or_singular_is_refused(covariance):
+    fusion = FixFusion(FusionConfig())
+    fusion.on_odometry(0.0, 0.0, 0.0, 0.0)
+    verdict = fusion.on_fix(0.0, 1.0, 2.0, 0.0, covariance=covariance)
+    assert verdict.fused is False and verdict.reason == 'covariance'
+
+
+def test_the_odometry_kept_reaches_back_the_history_and_no_further():
+    # history 0.5 s, odometry every 0.1 s up to 2 s: kept from 1.4 s (the last sample at
+    # or before 2.0 - 0.5 = 1.5 s, and the one before it): 1.45 s is fused, 1.35 s too old.
+    fusion = FixFusion(FusionConfig(history=0.55))
+    for k in range(21):
+        fusion.on_odometry(0.1 * k, 0.1 * k, 0.0, 0.0)
+    assert fusion.on_fix(1.45, 1.45, 0.0, 0.0).fused is True
+    verdict = fusion.on_fix(1.35, 1.35, 0.0, 0.0)
+    assert verdict.fused is False and verdict.reason == 'too_old'
+
+
+def test_a_fix_stamped_at_the_next_odometry_is_fused_with_it_once():
+    fusion = FixFusion(FusionConfig())
+    fusion.on_odometry(0.0, *_odometry(0.0))
+    fusion.on_odometry(0.01, *_odometry(0.01))
+    fusion.on_fix(0.0, *_circle(0.0))
+    assert fusion.on_fix(0.02, *_circle(0.02)).fused is False  # waits
+    fusion.on_odometry(0.02, *_odometry(0.02))
+    assert fusion.fused == 2
+    fusion.on_odometry(0.03, *_odometry(0.03))
+    assert fusion.fused == 2
+
+
+def test_agreeing_outliers_far_from_the_origin_restart_the_map_each_time():
+    # The agreement of two outliers compares both axes: far from the map's origin (y = 50)
+    # a wrong sign on y would make them disagree. Two restarts, both counted.
+    config = FusionConfig(reinit_after=2)
+    fusion = FixFusion(config)
+    far = (30.0, 50.0, 0.0)
+    fusion.on_odometry(0.0, 0.0, 0.0, 0.0)
+    fusion.on_fix(0.0, *far)
+    for k, offset in enumerate((0.4, 0.4, -0.4, -0.4), start=1):
+        fusion.on_odometry(0.1 * k, 0.0, 0.0, 0.0)
+        fusion.on_fix(0.1 * k, far[0] + offset, far[1], 0.0)
+    assert fusion.restarts == 2
+    assert fusion.pose()[1:] == pytest.approx((far[0] - 0.4, far[1], 0.0), abs=1e-9)
