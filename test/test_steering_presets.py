@@ -135,11 +135,11 @@ def test_eval_refuses_an_unknown_preset_of_the_file_in_one_line(tmp_path, capsys
 @pytest.mark.sim
 def test_montecarlo_builds_the_world_of_its_preset(monkeypatch):
     seen = []
-    _spy(monkeypatch, montecarlo_cli, 'pybullet_world', seen)
+    _spy(monkeypatch, montecarlo_cli, 'pybullet_settings', seen)
     with pytest.raises(_Stop):
         montecarlo_cli.main(['--plant', 'pybullet', '--params', ROBOT, '--steering', 'servo',
                              '--n', '2', '--jobs', '1'])
-    assert _motors(seen[0]) == {'steer_lag': 0.050, 'steer_rate_limit': 5.0}
+    assert _motors(seen[0].world) == {'steer_lag': 0.050, 'steer_rate_limit': 5.0}
 
 
 @pytest.mark.sim
@@ -156,7 +156,7 @@ def test_compare_hands_its_preset_to_every_run_and_the_run_to_its_world(monkeypa
         settings = staticmethod(plant.settings)
 
         @staticmethod
-        def simulate(session, x0, duration, world, *rest):
+        def simulate(session, x0, duration, world, *rest, **options):
             seen.append(world)
             raise _Stop
     monkeypatch.setattr(comparison_scenarios, 'robot_plant', lambda name: Spy)

@@ -15,16 +15,6 @@ from nfmr_dlsmc.runtime.params import load_params_file
 import numpy as np
 
 
-def pybullet_world(params_file, dt: float, sensing: str | None = None,
-                   steering: str | None = None):
-    """
-    Return the pybullet chassis's world configuration for a controller of period ``dt``.
-
-    ``.world`` of :func:`pybullet_settings`, which says more.
-    """
-    return pybullet_settings(params_file, dt, sensing, steering).world
-
-
 def pybullet_settings(params_file, dt: float, sensing: str | None = None,
                       steering: str | None = None):
     """
