@@ -56,10 +56,11 @@ class SimSettings:
                       'lockstep_timeout); realtime: steps follow the wall clock, never '
                       'faster; a machine that cannot keep up slows the run down, no step is '
                       'skipped', one_of('lockstep', 'realtime'), read_only=True)
-    sensing: str = param('', '', 'a sensing preset (ideal, good, harsh) that sets the '
-                         "odometry's rate, latency, noise and bias walk "
-                         "(disturbance.odom_*: set one or the other); '': those "
-                         'parameters as given', one_of('', *SENSING_PRESETS), read_only=True)
+    sensing: str = param('', '', 'a sensing preset (ideal, good, harsh, field) that sets '
+                         "the odometry's rate, latency, noise and bias walk, the encoders "
+                         'and the localisation fixes (disturbance.odom_*, encoders.*, '
+                         "localization.*: set one or the other); '': those parameters as "
+                         'given', one_of('', *SENSING_PRESETS), read_only=True)
     steer_motors: str = param('', '', 'a steering preset (ideal, servo, slow) that sets the '
                               "steer motors' lag and rate limit (motors.steer_lag, "
                               'motors.steer_rate_limit: set one or the other; '
@@ -162,7 +163,7 @@ def sim_settings(flat: dict) -> SimSettings:
     """
     check_known(flat, sim_parameters())
     flat = _expand_preset(flat, 'sensing', SENSING_PRESETS, SENSING_KEYS, with_sensing,
-                          'the odometry parameters')
+                          'the odometry, encoder and fix parameters')
     flat = _expand_preset(flat, 'steer_motors', STEERING_PRESETS, STEERING_KEYS,
                           with_steering, 'the steer motor parameters')
     world = from_flat(WorldConfig, flat, chassis=from_flat(ChassisConfig, flat),

@@ -149,7 +149,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--disturbance', choices=('none', 'paper'), default='none')
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
                         help="pybullet: the robot's odometry from a preset (ideal, good, "
-                             "harsh) instead of the file's sim section")
+                             "harsh, field) instead of the file's sim section")
     add_steering(parser)
     parser.add_argument('--params', metavar='FILE.yaml',
                         help="controller parameter file (the paper's law: batch simulator; "
