@@ -5,10 +5,47 @@ from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop
 from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
 
-__all__ = ['DlsmcController']
+__all__ = ['DlsmcController', 'DlsmcLoops']
 
 
-class DlsmcController(CascadeController):
+class DlsmcLoops:
+    """
+    What a controller of the BTINTSMC and ABFSMC loops takes from its ``DlsmcConfig``.
+
+    The limits, the period, the omega low-pass (D14) and both loops' gains in use, for the
+    paper's cascade (:class:`DlsmcController`) and the free-ICR law alike; a subclass takes
+    the rest in :meth:`_configure`.
+    """
+
+    __slots__ = ()
+
+    @property
+    def config(self) -> DlsmcConfig:
+        """
+        Return the configuration in use.
+
+        Assigning a new one takes effect at the next step and keeps the loops' state
+        (integrals, e(0), adaptive phase).
+        """
+        return self._config
+
+    @config.setter
+    def config(self, config: DlsmcConfig) -> None:
+        self._config = config
+        self._limits = config.limits
+        self._dt = config.dt
+        self._omega_tau = config.omega_filter  # [s] low-pass of the commanded omega (0: none)
+        self._omega_band = config.omega_filter_band  # [rad] abs(s) where it has faded
+        self.outer.gains = config.outer_in_use
+        self.inner.gains = config.inner_in_use
+        self.inner.omega_max = config.limits.omega_max
+        self._configure(config)
+
+    def _configure(self, config: DlsmcConfig) -> None:
+        """Take what only this controller uses of ``config`` (nothing here)."""
+
+
+class DlsmcController(DlsmcLoops, CascadeController):
     """
     The DLSMC: the cascade of Fig. 2 with the BTINTSMC and the ABFSMC.
 
@@ -34,29 +71,11 @@ class DlsmcController(CascadeController):
                          AbfsmcInnerLoop(config.inner_in_use), name='dlsmc')
         self.config = config
 
-    @property
-    def config(self) -> DlsmcConfig:
-        """
-        Return the configuration in use.
-
-        Assigning a new one takes effect at the next step and keeps the loops' state
-        (integrals, e(0), adaptive phase).
-        """
-        return self._config
-
-    @config.setter
-    def config(self, config: DlsmcConfig) -> None:
-        self._config = config
-        self._limits = config.limits
-        self._dt = config.dt
+    def _configure(self, config: DlsmcConfig) -> None:
+        """Take the cascade's own options: theta_d's filter and source, align_speed."""
         self._filter_tau = config.thetadot_filter
-        self._omega_tau = config.omega_filter
-        self._omega_band = config.omega_filter_band
         self._align = config.align_speed
         self._analytic = config.thetadot_source == 'analytic'
-        self.outer.gains = config.outer_in_use
-        self.inner.gains = config.inner_in_use
-        self.inner.omega_max = config.limits.omega_max
 
     def telemetry(self) -> tuple:
         """Return the internal signals of the last step, named by ``TELEMETRY_FIELDS``."""

@@ -65,7 +65,7 @@ import math
 
 from nfmr_dlsmc.core.angles import wrap_angle
 from nfmr_dlsmc.core.cascade import smoothed_yaw_rate
-from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.dlsmc import DlsmcController, DlsmcLoops
 from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.inner_loop import AbfsmcInnerLoop
 from nfmr_dlsmc.core.outer_loop import BtintsmcOuterLoop
@@ -81,7 +81,7 @@ MOTIONS = ('nonholonomic', 'free_icr')
 MOTION = one_of(*MOTIONS)
 
 
-class FreeIcrController(SaturatedController):
+class FreeIcrController(DlsmcLoops, SaturatedController):
     """
     The DLSMC in the free-ICR mode: BTINTSMC -> centre velocity, ABFSMC -> omega to psi_d.
 
@@ -129,27 +129,6 @@ class FreeIcrController(SaturatedController):
         self.inner = AbfsmcInnerLoop(config.inner_in_use)
         self.config = config
         self.reset()
-
-    @property
-    def config(self) -> DlsmcConfig:
-        """
-        Return the configuration in use.
-
-        Assigning a new one takes effect at the next step and keeps the loops' state
-        (integrals, e(0), adaptive phase).
-        """
-        return self._config
-
-    @config.setter
-    def config(self, config: DlsmcConfig) -> None:
-        self._config = config
-        self._limits = config.limits
-        self._dt = config.dt
-        self._omega_tau = config.omega_filter  # [s] low-pass of the commanded omega (0: none)
-        self._omega_band = config.omega_filter_band  # [rad] abs(s_psi) where it has faded
-        self.outer.gains = config.outer_in_use
-        self.inner.gains = config.inner_in_use
-        self.inner.omega_max = config.limits.omega_max
 
     def reset(self) -> None:
         """Start over: the next step is t = 0 of a new run."""
