@@ -22,6 +22,7 @@ from nfmr_dlsmc.core.steering import (
     SteerMode,
     wheel_commands,
 )
+from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.kinematic import check_start, SimResult
 from nfmr_dlsmc.plants.registry import RobotPlant
@@ -33,6 +34,10 @@ from nfmr_sim.sim_params import sim_parameters, sim_settings, SimSettings
 from nfmr_sim.world import ChassisWorld
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
+
+#: The steer mode whose tracked point P is the chassis centre (crab, j1 = -1): the point the
+#: free-ICR law tracks (D36).
+CENTRE = SteerMode(j1=-1.0, j2=2.0)
 
 
 def simulate_pybullet(session: TrackingSession, x0, duration: float,
@@ -97,7 +102,9 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
     params = session.params
     geometry, steering = params.geometry, params.steering
     world_config = WorldConfig() if world_config is None else world_config
-    world_config = replace(world_config, steer_mode=steering)
+    free_icr = params.motion == 'free_icr'
+    # The free-ICR law tracks the centre: the world's P is the centre (its crab mode's).
+    world_config = replace(world_config, steer_mode=CENTRE if free_icr else steering)
     dt = world_config.physics_dt
     x0, n = check_start(session.controller, x0, duration, dt)
     chassis = world_config.chassis
@@ -120,11 +127,11 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
                                  noise.odom_yaw_noise ** 2)
     dist = disturbance.sample(np.arange(n) * dt) if disturbance is not None else np.zeros(n)
     fields = session.controller.TELEMETRY_FIELDS
-    t, truth, commands, reference = np.empty(n), np.empty((n, 3)), np.empty((n, 2)), []
+    t, truth, commands, reference = np.empty(n), np.empty((n, 3)), np.empty((n, 3)), []
     telemetry, steer_rows, joint_rates = np.empty((n, len(fields))), np.empty((n, 4)), \
         np.empty((n, 4))
     every = max(1, int(round(1.0 / dt)))
-    steer, wheels, v, w, row_t = np.zeros(4), np.zeros(4), 0.0, 0.0, 0.0
+    steer, wheels, v, v_y, w, row_t = np.zeros(4), np.zeros(4), 0.0, 0.0, 0.0, 0.0
     with ChassisWorld(world_config) as world:
         world.reset(x0)
         out = replace(world.observe(), odometry=world.first_odometry())
@@ -132,6 +139,8 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
             now = sent_time(out.time)
             odom = None if fused else out.odometry
             ticked = None
+            if free_icr:
+                session.on_steer_angles(out.joint_position[:4].tolist())
             if fused:
                 wheels_in.offer(session, k, out, now)
                 fix = out.localization
@@ -150,17 +159,22 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
                 ticked = session.tick(now, now)
             if ticked is not None:
                 v, w, steer, wheels = ticked.v, ticked.omega, ticked.steer, ticked.wheel_speed
+                v_y = ticked.v_y
                 row_t = ticked.state.t
                 reference.append((row_t, ticked.state.x_d, ticked.state.y_d))
             else:  # no tick: zero speed, the steering held
-                v = w = 0.0
+                v = v_y = w = 0.0
                 wheels = np.zeros(4)
                 reference.append((row_t, *params.trajectory.sample(row_t)[:2]))
-            if varpi:
+            if varpi and free_icr:
+                cmd = swerve_commands(v, v_y, w + varpi, out.joint_position[:4].tolist(),
+                                      geometry, params.swerve)
+                steer, wheels = cmd.steer, cmd.wheel_speed
+            elif varpi:
                 cmd = wheel_commands(v, w + varpi, geometry, steering, hold_steer=steer)
                 steer, wheels = cmd.steer, cmd.wheel_speed
             p = out.point_p
-            t[k], truth[k], commands[k] = now, (p.x, p.y, p.yaw), (v, w)
+            t[k], truth[k], commands[k] = now, (p.x, p.y, p.yaw), (v, w, v_y)
             telemetry[k] = session.controller.telemetry()
             steer_rows[k] = steer
             joint_rates[k] = out.joint_velocity[:4]
@@ -179,7 +193,7 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         t=t, state=truth, reference=np.column_stack([ref[:, 1:], velocity]), v=commands[:, 0],
         omega=commands[:, 1], disturbance=dist, telemetry=dict(zip(fields, telemetry.T)),
         dt=dt, final_state=np.array([final.x, final.y, final.yaw]), steer=steer_rows,
-        steer_joint_velocity=joint_rates)
+        steer_joint_velocity=joint_rates, v_y=commands[:, 2] if free_icr else None)
 
 
 class _WheelInput:

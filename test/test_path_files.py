@@ -14,6 +14,7 @@ from nfmr_dlsmc.runtime.params import controller_params
 from nfmr_dlsmc.runtime.path_files import (
     load_path,
     load_path_trajectory,
+    load_path_yaw,
     MAX_FILE_SIZE,
     PathFileError,
 )
@@ -292,6 +293,112 @@ def test_a_path_file_gives_its_trajectory(tmp_path):
     assert traj.profile is profile
     np.testing.assert_array_equal(traj.points, [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
     assert traj.end_pose == pytest.approx((4.0, 3.0, math.pi / 2.0))
+
+
+# -- headings -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize('name, text, points, yaw', [
+    ('spin.csv', 'x,y,yaw\n0,0,0\n0,0,1.5708\n2,0,1.5708\n',
+     [[0.0, 0.0], [0.0, 0.0], [2.0, 0.0]], [0.0, 1.5708, 1.5708]),
+    ('order.csv', ' YAW , y, X\n-1,2,1\n0.5,3,4  # a comment\n', [[1.0, 2.0], [4.0, 3.0]],
+     [-1.0, 0.5]),
+    ('timed.csv', 't,x,y,yaw\n0,0,0,0\n2,1,0,1\n', [[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]],
+     [0.0, 1.0]),
+    ('timed.txt', 'yaw,t,y,x\n0,0,0,0\n1,2,0,1\n', [[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]],
+     [0.0, 1.0]),
+    ('map.yaml', 'points:\n  - {x: 0, y: 0, yaw: 0}\n  - {yaw: 1.5708, y: 0, x: 0}\n'
+                 '  - {x: 2, y: 0, yaw: 1.5708}\n',
+     [[0.0, 0.0], [0.0, 0.0], [2.0, 0.0]], [0.0, 1.5708, 1.5708]),
+    ('timed.yml', '- {t: 0, x: 0, y: 0, yaw: 0.0}\n- {t: 2.0, x: 1, y: 0, yaw: 1e0}\n',
+     [[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]], [0.0, 1.0]),
+    ('mixed forms.yaml', '- [0, 0]\n- {x: 1, y: 2}\n', [[0.0, 0.0], [1.0, 2.0]], None),
+])
+def test_a_yaw_column_or_key_gives_the_headings(tmp_path, name, text, points, yaw):
+    path = _write(tmp_path, name, text)
+    got, headings = load_path_yaw(path)
+    np.testing.assert_array_equal(got, points)
+    np.testing.assert_array_equal(load_path(path), points)  # load_path leaves the yaw out
+    if yaw is None:
+        assert headings is None
+    else:
+        np.testing.assert_array_equal(headings, yaw)
+    assert load_path_trajectory(path).has_yaw == (yaw is not None)
+
+
+def test_a_path_file_without_yaw_has_no_headings(tmp_path):
+    points, headings = load_path_yaw(_write(tmp_path, 'p.csv', 'x,y\n0,0\n1,0\n'))
+    assert headings is None and points.shape == (2, 2)
+
+
+def test_a_file_with_yaw_gives_the_heading_reference(tmp_path):
+    path = _write(tmp_path, 'spin.csv', '# spin on the spot, then drive facing +y\n'
+                                        'x,y,yaw\n0,0,0\n0,0,1.5708\n2,0,1.5708\n')
+    traj = load_path_trajectory(path)
+    assert traj.yaw_reference(-1.0) == (0.0, 0.0)
+    assert traj.yaw_reference(traj.duration) == (1.5708, 0.0)
+    assert traj.sample(1.0) == (0.0, 0.0, 0.0, 0.0)  # spinning on the spot
+    assert 0.0 < traj.yaw_reference(1.0)[0] < 1.5708
+
+
+def test_a_byte_order_mark_before_a_yaw_header_is_skipped(tmp_path):
+    path = tmp_path / 'sheet.csv'
+    path.write_bytes(b'\xef\xbb\xbf' + 'x,y,yaw\r\n0,0,0\r\n1,2,3\r\n'.encode())
+    points, headings = load_path_yaw(path)
+    np.testing.assert_array_equal(points, [[0.0, 0.0], [1.0, 2.0]])
+    np.testing.assert_array_equal(headings, [0.0, 3.0])
+
+
+YAW_ERRORS = [
+    ('p.csv', 'x,y,yaw\n0,0,0\n1,0,nan\n', 3, 'yaw', "'nan' is not a finite number"),
+    ('p.csv', 'x,y,yaw\n0,0,0\n1,0,-inf\n', 3, 'yaw', "'-inf' is not a finite number"),
+    ('p.csv', 'x,y,yaw\n0,0,0\n1,0,north\n', 3, 'yaw', "'north' is not a number"),
+    ('p.csv', 'x,y,yaw\n0,0,0\n1,0,\n', 3, 'yaw',
+     'no yaw, but the header (line 1) names a yaw column: a path has a yaw on every point or '
+     'on none'),
+    ('p.csv', 'x,y,yaw\n0,0,0\n1,0\n', 3, 'yaw', 'no yaw, but the header (line 1) names'),
+    ('p.csv', 'x,yaw,y\n0,0,0\n1,,0\n', 3, 'yaw', 'no yaw, but the header (line 1) names'),
+    ('p.csv', 'x,y\n0,0\n1,0,1.5\n', 3, None,
+     '3 fields, but the header (line 1) names 2: x,y (a yaw needs a yaw column in the header: '
+     'a path has a yaw on every point or on none)'),
+    ('p.csv', 'x,y,heading\n0,0,0\n', 1, None, "unknown column 'heading'"),
+    ('p.csv', 'x,y,yaw,YAW\n0,0,0,0\n', 1, None, 'column yaw is named twice'),
+    ('p.yaml', '- {x: 0, y: 0, yaw: 0}\n- {x: 1, y: 0}\n', 2, 'yaw',
+     'no yaw, but the first point (line 1) has one: a path has a yaw on every point or on '
+     'none'),
+    ('p.yaml', 'points:\n- [0, 0]\n- {x: 1, y: 0, yaw: 1}\n', 3, 'yaw',
+     'a yaw, but the first point (line 2) has none'),
+    ('p.yaml', '- {x: 0, y: 0, yaw: 0}\n- {x: 1, y: 0, yaw: .nan}\n', 2, 'yaw',
+     "'.nan' is not a finite number"),
+    ('p.yaml', '- {x: 0, y: 0, yaw: 0}\n- {x: 1, y: 0, yaw: [1]}\n', 2, 'yaw',
+     'expected a number, found a list or mapping'),
+    ('p.yaml', '- {x: 0, y: 0, psi: 0}\n', 1, None, "unknown key 'psi': a point is a list"),
+    ('p.yaml', '- {x: 0, yaw: 0}\n', 1, None, 'no key y: a point is a list'),
+    ('p.yaml', '- {x: 0, y: 0, x: 1}\n', 1, 'x', 'key x given twice'),
+    ('p.yaml', '- {t: 0, x: 0, y: 0}\n- {x: 1, y: 0}\n', 2, None,
+     'keys x, y, but the first point (line 1) has t, x, y'),
+    ('p.yaml', '- {x: 0, y: 0}\n- [0, 1, 1]\n', 2, None,
+     '3 numbers, but the first point (line 1) has 2: [x, y]'),
+]
+
+
+@pytest.mark.parametrize('name, text, line, column, message', YAW_ERRORS)
+def test_a_bad_or_missing_yaw_is_refused_naming_the_line_and_column(tmp_path, name, text, line,
+                                                                    column, message):
+    path = _write(tmp_path, name, text)
+    for load in (load_path, load_path_yaw, load_path_trajectory):
+        with pytest.raises(PathFileError) as caught:
+            load(path)
+        where = f'{path} line {line}' + (f', column {column}' if column else '')
+        assert str(caught.value).startswith(f'{where}: {message}')
+        assert (caught.value.line, caught.value.column) == (line, column)
+
+
+def test_a_turn_faster_than_the_robot_is_refused_naming_its_line(tmp_path):
+    path = _write(tmp_path, 'fast.csv', 't,x,y,yaw\n0,0,0,0\n# then\n1,1,0,2.5\n')
+    with pytest.raises(PathFileError, match=r'fast.csv line 4: point 1 at \(1.00, 0.00\) m: the '
+                                            r'stamps ask for a yaw rate of 2.5 rad/s'):
+        load_path_trajectory(path)
+    assert load_path_trajectory(path, PathProfile(omega_max=2.5)).has_yaw
 
 
 # -- the shipped examples -------------------------------------------------------------------

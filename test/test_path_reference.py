@@ -83,11 +83,13 @@ def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     declared = {p.name: p for p in params_of(PathProfile)}
     assert list(declared) == [f'trajectory.path.{n}' for n in (
         'speed', 'lateral_acceleration', 'omega_max', 'v_max', 'acceleration', 'deceleration',
-        'corner_radius', 'start_speed', 'curvature_rate')]
+        'corner_radius', 'start_speed', 'curvature_rate', 'yaw_acceleration')]
     assert [declared[f'trajectory.path.{n}'].default for n in (
         'speed', 'lateral_acceleration', 'omega_max', 'v_max', 'acceleration', 'deceleration',
-        'corner_radius', 'start_speed', 'curvature_rate')] == [0.5, 0.5, 1.0, 2.0, 0.3, 0.3,
-                                                               0.3, 0.0, 2.5]
+        'corner_radius', 'start_speed', 'curvature_rate', 'yaw_acceleration')] == [
+            0.5, 0.5, 1.0, 2.0, 0.3, 0.3, 0.3, 0.0, 2.5, 2.0]
+    assert declared['trajectory.path.yaw_acceleration'].unit == 'rad/s^2'
+    assert declared['trajectory.path.yaw_acceleration'].rule_text == '> 0'
     assert declared['trajectory.path.lateral_acceleration'].unit == 'm/s^2'
     assert declared['trajectory.path.curvature_rate'].unit == '1/(m*s)'
     assert declared['trajectory.path.curvature_rate'].rule_text == '> 0'
@@ -107,6 +109,7 @@ def test_the_profile_declares_its_parameters_with_units_defaults_and_rules():
     ({'curvature_rate': -2.5}, 'trajectory.path.curvature_rate = -2.5 1/(m*s): must be > 0'),
     ({'curvature_rate': math.nan}, 'trajectory.path.curvature_rate = nan 1/(m*s): must be a '
                                    'finite'),
+    ({'yaw_acceleration': 0.0}, 'trajectory.path.yaw_acceleration = 0.0 rad/s^2: must be > 0'),
     ({'start_speed': 0.6}, 'trajectory.path.start_speed = 0.6 m/s: must be <= '
                            'trajectory.path.speed = 0.5 m/s'),
 ])

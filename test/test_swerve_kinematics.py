@@ -14,10 +14,12 @@ import pytest
 GEOM = RobotGeometry(wheelbase=2.0, track=1.0, wheel_radius=0.5)
 POS = [(1.0, 0.5), (1.0, -0.5), (-1.0, 0.5), (-1.0, -0.5)]  # FL FR RL RR [m]
 HALF = 0.5 * math.pi
-#: The joint's range +-pi/2 (the default); align above 1 rad (4 rad/s * 0.25 s).
-NARROW = SwerveConfig(steer_rate=4.0, align_time=0.25, align_tolerance=0.25)
+#: The joint's range +-pi/2 (the default); align above 1 rad (4 rad/s * 0.25 s); no margin
+#: at the range's ends (eq. 2 without its hysteresis, tested on its own below).
+NARROW = SwerveConfig(steer_rate=4.0, align_time=0.25, align_tolerance=0.25,
+                      reverse_margin=0.0)
 #: The range +-pi; align above 2 rad (10 rad/s * 0.2 s).
-WIDE = SwerveConfig(steer_limit=math.pi, steer_rate=10.0, align_time=0.2)
+WIDE = SwerveConfig(steer_limit=math.pi, steer_rate=10.0, align_time=0.2, reverse_margin=0.0)
 ZERO = (0.0, 0.0, 0.0, 0.0)
 
 
@@ -136,10 +138,33 @@ def test_past_the_range_a_wheel_unwinds_and_a_wider_range_lets_it_turn_on():
     assert angles == pytest.approx([0.1 - HALF] * 4, abs=1e-12)  # forced: pi - 0.03 to go
     assert speeds == [0.0] * 4 and aligning
     angles, speeds, aligning = run(twist, current=[1.5] * 4,
-                                   config=SwerveConfig(steer_limit=2.0))
+                                   config=SwerveConfig(steer_limit=2.0, reverse_margin=0.0))
     assert angles == pytest.approx([HALF + 0.1] * 4, abs=1e-12)  # 0.07 to go, forward
     assert speeds == pytest.approx([2.0 * math.cos(HALF + 0.1 - 1.5)] * 4, abs=1e-12)
     assert not aligning
+
+
+def test_at_the_end_of_the_range_a_margin_holds_the_wheel_rather_than_reverse_it():
+    # Sideways with the side at the range's end: a correction tips the direction past it.
+    config = SwerveConfig(steer_rate=4.0, align_time=0.25, align_tolerance=0.25)
+    assert config.reverse_margin == 0.1
+    for tip in (0.01, 0.099):
+        twist = (-math.sin(tip), math.cos(tip), 0.0)  # pi/2 + tip
+        angles, speeds, aligning = run(twist, current=[HALF] * 4, config=config)
+        assert angles == [HALF] * 4 and not aligning  # held at the end, driving on
+        assert speeds == pytest.approx([2.0] * 4)
+        angles, _, _ = run(twist, current=[HALF] * 4, config=NARROW)
+        assert angles == pytest.approx([tip - HALF] * 4, abs=1e-12)  # no margin: reversed
+    twist = (-math.sin(0.11), math.cos(0.11), 0.0)  # beyond the margin: reversed
+    angles, speeds, _ = run(twist, current=[HALF] * 4, config=config)
+    assert angles == pytest.approx([0.11 - HALF] * 4, abs=1e-12) and speeds == [0.0] * 4
+    # Mirrored at -pi/2; and a wheel far from the end takes the angle inside the range.
+    angles, _, _ = run((-math.sin(0.05), -math.cos(0.05), 0.0), current=[-HALF] * 4,
+                       config=config)
+    assert angles == [-HALF] * 4
+    angles, _, _ = run((-math.sin(0.05), math.cos(0.05), 0.0), current=[-1.0] * 4,
+                       config=config)
+    assert angles == pytest.approx([0.05 - HALF] * 4, abs=1e-12)
 
 
 def test_a_direction_crossing_pi_moves_the_set_point_by_no_jump():
@@ -280,7 +305,7 @@ ANGLE = st.floats(-math.pi, math.pi)
 @example(0.0, 1.0, 0.0, [0.0] * 4, HALF)
 @example(-1.0, -1e-3, 0.0, [3.0, -3.0, 3.1, -3.1], math.pi)
 def test_the_set_point_is_the_nearest_equivalent_angle_in_range(vx, vy, omega, current, limit):
-    config = SwerveConfig(steer_limit=limit)
+    config = SwerveConfig(steer_limit=limit, reverse_margin=0.0)
     out = swerve_commands(vx, vy, omega, current, GEOM, config)
     for (x, y), c, d, w in zip(POS, current, out.steer.tolist(), out.wheel_speed.tolist()):
         ux, uy = vx - omega * y, vy + omega * x

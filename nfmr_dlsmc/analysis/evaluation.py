@@ -10,10 +10,10 @@ from dataclasses import dataclass, replace
 import time
 
 from nfmr_dlsmc.analysis.run_setup import pybullet_settings
-from nfmr_dlsmc.baselines.registry import build_controller
+from nfmr_dlsmc.baselines.registry import build_controller, FREE_ICR_CONTROLLERS
 from nfmr_dlsmc.core.arrival import with_arrival
 from nfmr_dlsmc.core.disturbances import disturbance_by_name
-from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.free_icr import motion_controller
 from nfmr_dlsmc.core.metrics import (
     ARRIVAL_ROWS,
     format_metric,
@@ -23,7 +23,7 @@ from nfmr_dlsmc.core.metrics import (
 from nfmr_dlsmc.core.sensing import with_controller_sensing
 from nfmr_dlsmc.core.trajectories import make_trajectory
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.plants.kinematic import simulate, with_steer_angles
+from nfmr_dlsmc.plants.kinematic import simulate, simulate_free_icr, with_steer_angles
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.runtime.params import (
     check_odometry_timing,
@@ -150,8 +150,13 @@ def load_evaluation(plant: str, controller_name: str, x0, duration: float | None
     params = controller_params(with_controller_sensing(flat, sensing))
     trajectory = (params.trajectory if trajectory_name is None
                   else make_trajectory(trajectory_name))
+    if (controller_name in FREE_ICR_CONTROLLERS) != (params.motion == 'free_icr') \
+            and controller_name != 'dlsmc':
+        rule = ('must be dlsmc or one of ' + ', '.join(FREE_ICR_CONTROLLERS)
+                if params.motion == 'free_icr' else 'needs motion: free_icr in --params')
+        raise ParameterError('controller', controller_name, rule)
     if controller_name == 'dlsmc':
-        controller = DlsmcController(params.dlsmc)
+        controller = motion_controller(params.motion, params.dlsmc)
     else:
         blocks = load_gain_blocks(gains_file or shipped_config('comparison.yaml'))
         controller = build_controller(controller_name, blocks.get(controller_name),
@@ -196,7 +201,8 @@ def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
     ----------
     plant : str
         ``'kinematic'``: the model (3), forward Euler at the law's period, the result with
-        the steer angles the wheel mapping would command; ``'pybullet'``: the chassis of
+        the steer angles the wheel mapping would command (``motion: free_icr``: the
+        omnidirectional model, no steer angles); ``'pybullet'``: the chassis of
         ``world`` driven by the controller node's
         :class:`~nfmr_dlsmc.runtime.tracking_session.TrackingSession` (its odometry rules
         the defaults), as a lockstep run over ROS drives it.
@@ -222,6 +228,9 @@ def plant_run(plant: str, law, params: ControllerParams, trajectory, x0,
                                   **session_options({}), law=law)
         return robot_plant('pybullet').simulate(session, x0, duration, world, disturbance,
                                                 progress, encoders=encoders)
+    if params.motion == 'free_icr':
+        return simulate_free_icr(with_arrival(law, trajectory, params.arrival), trajectory,
+                                 params.heading, x0, duration, params.dlsmc.dt, disturbance)
     run = simulate(with_arrival(law, trajectory, params.arrival), trajectory, x0, duration,
                    params.dlsmc.dt, disturbance)
     return with_steer_angles(run, params.geometry, params.steering)

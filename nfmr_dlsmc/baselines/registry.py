@@ -22,6 +22,7 @@ from nfmr_dlsmc.baselines import (
 from nfmr_dlsmc.baselines import (
     geometric_trackers as trackers,
 )
+from nfmr_dlsmc.baselines.free_icr_pd import FreeIcrPdController, FreeIcrPdGains
 from nfmr_dlsmc.core.cascade import CascadeController
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
@@ -46,11 +47,15 @@ CONTROLLER_LABELS = {
     'dlsmc_robot': 'DLSMC, robot profile',
 }
 CONTROLLER_NAMES = tuple(CONTROLLER_LABELS)
+#: The comparison laws of the free-ICR mode (D36): twist (v_x, v_y, omega) out, a heading
+#: reference in; they run only with ``motion: free_icr``, the unicycle laws only without.
+FREE_ICR_LABELS = {'free_icr_pd': 'PD + feed-forward (free ICR)'}
+FREE_ICR_CONTROLLERS = tuple(FREE_ICR_LABELS)
 
 
 def controller_label(name: str) -> str:
     """Return the display name of a controller (the name itself for one not listed)."""
-    return CONTROLLER_LABELS.get(name, name)
+    return CONTROLLER_LABELS.get(name, FREE_ICR_LABELS.get(name, name))
 
 
 _SINGLE_LOOP = {
@@ -60,6 +65,7 @@ _SINGLE_LOOP = {
     'pure_pursuit': (trackers.PurePursuitController, gains.PurePursuitGains),
     'stanley': (trackers.StanleyController, gains.StanleyGains),
     'kanayama': (trackers.KanayamaController, gains.KanayamaGains),
+    'free_icr_pd': (FreeIcrPdController, FreeIcrPdGains),
 }
 
 #: The DLSMC's blocks: ``outer`` and ``inner`` sections and these DlsmcConfig options.
@@ -113,7 +119,8 @@ def gain_sections(name: str) -> dict:
     if name in _CASCADES:
         (_, outer_gains), (_, inner_gains) = _CASCADES[name]
         return {'outer': outer_gains, 'inner': inner_gains}
-    raise ParameterError('controller', name, f"must be one of {', '.join(CONTROLLER_NAMES)}")
+    raise ParameterError('controller', name,
+                         f"must be one of {', '.join(CONTROLLER_NAMES + FREE_ICR_CONTROLLERS)}")
 
 
 def build_controller(name: str, block: dict | None = None, limits: InputLimits | None = None,

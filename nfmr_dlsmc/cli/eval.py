@@ -10,7 +10,7 @@ import sys
 
 from nfmr_dlsmc.analysis.comparison_scenarios import PLANTS
 from nfmr_dlsmc.analysis.evaluation import evaluate, format_table, load_evaluation, paper_values
-from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
+from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES, FREE_ICR_CONTROLLERS
 from nfmr_dlsmc.cli.common import (
     add_steering,
     check_run_length,
@@ -38,9 +38,10 @@ def _parser() -> argparse.ArgumentParser:
                         help='kinematic: the unicycle model (3), forward Euler (default); '
                              'pybullet: the simulated 4WIS chassis in this process, built '
                              "from the --params file's 'sim' section")
-    parser.add_argument('--controller', choices=CONTROLLER_NAMES, default='dlsmc',
+    parser.add_argument('--controller', choices=CONTROLLER_NAMES + FREE_ICR_CONTROLLERS,
+                        default='dlsmc',
                         help='the DLSMC (gains from --params) or a comparison controller '
-                             '(gains from --gains)')
+                             '(gains from --gains); free_icr_pd only with motion: free_icr')
     parser.add_argument('--gains', metavar='FILE.yaml', default=None,
                         help='comparison gains file for a controller other than the DLSMC '
                              '(default config/comparison.yaml)')

@@ -33,6 +33,12 @@ robot a few millimetres off would turn around it. :class:`ArrivingController` wr
    reference reaches v_min, so the law takes over without a step. A robot farther from the
    reference (a start off the path) is left to the law, which must turn it onto the path.
 
+A free-ICR law (:class:`~nfmr_dlsmc.core.free_icr.FreeIcrController`, D36) gets
+:class:`ArrivingFreeIcr` instead: rules 2 and 4 with the heading of the reference psi_d for
+the goal's (the reference's heading must rest too), no others. Its velocity does not depend
+on its heading, so it never has to turn round to reach a goal it passed (3), it may move
+back to a reference behind it (5), and it has no v_min to slow below (1, 6).
+
 Whichever ends the run, :attr:`ArrivingController.outcome` says which, the next steps
 command zero, and :meth:`~ArrivingController.reset` starts over (a new reference).
 
@@ -53,7 +59,8 @@ from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
-__all__ = ['ARRIVAL_OUTCOMES', 'ArrivalConfig', 'ArrivingController', 'FINAL_SHARE',
+__all__ = ['ARRIVAL_OUTCOMES', 'ArrivalConfig', 'ArrivingController', 'ArrivingFreeIcr',
+           'FINAL_SHARE',
            'REACH_SAMPLES', 'check_goal_reach', 'goal_reach', 'with_arrival']
 
 #: Values of the telemetry field ``arrival``: the run goes on (0) or how it ended.
@@ -103,7 +110,44 @@ class ArrivalConfig:
         check_fields(self)
 
 
-class ArrivingController:
+class _Arrival:
+    """What both arrival wrappers keep: the law, the goal, the outcome and its errors."""
+
+    def __init__(self, controller, goal, config: ArrivalConfig | None = None):
+        self.controller = controller
+        self.goal = tuple(float(v) for v in goal)
+        self.config = ArrivalConfig() if config is None else config
+        self.TELEMETRY_FIELDS = (*controller.TELEMETRY_FIELDS, 'arrival')
+        self.reset()
+
+    @property
+    def period(self) -> float:
+        """Return the wrapped controller's control period [s]."""
+        return self.controller.period
+
+    def reset(self) -> None:
+        """Start over with the reference from its start."""
+        self.controller.reset()
+        self.outcome = _TRACKING
+        self.position_error = self.yaw_error = math.nan
+        self._left_goal = False  # whether the reference has been away from the goal
+        self._at_rest = 0.0  # time [s] the reference has rested at the goal
+
+    @property
+    def ended(self) -> bool:
+        """Whether the run has ended: arrived, passed or timed out."""
+        return self.outcome != _TRACKING
+
+    def _ended(self, outcome: float, distance: float, yaw_error: float) -> None:
+        self.outcome = outcome
+        self.position_error, self.yaw_error = distance, yaw_error
+
+    def telemetry(self) -> tuple:
+        """Return the wrapped controller's telemetry and ``arrival`` (the outcome so far)."""
+        return (*self.controller.telemetry(), self.outcome)
+
+
+class ArrivingController(_Arrival):
     """
     A (v, omega) controller that stops at the end of its reference (module docstring).
 
@@ -128,17 +172,8 @@ class ArrivingController:
     """
 
     def __init__(self, controller, goal, config: ArrivalConfig | None = None):
-        self.controller = controller
         controller.follow_slow_reference = True
-        self.goal = tuple(float(v) for v in goal)
-        self.config = ArrivalConfig() if config is None else config
-        self.TELEMETRY_FIELDS = (*controller.TELEMETRY_FIELDS, 'arrival')
-        self.reset()
-
-    @property
-    def period(self) -> float:
-        """Return the wrapped controller's control period [s]."""
-        return self.controller.period
+        super().__init__(controller, goal, config)
 
     @property
     def name(self) -> str:
@@ -147,17 +182,8 @@ class ArrivingController:
 
     def reset(self) -> None:
         """Start over with the reference from its start."""
-        self.controller.reset()
-        self.outcome = _TRACKING
-        self.position_error = self.yaw_error = math.nan
-        self._left_goal = False  # whether the reference has been away from the goal
-        self._at_rest = 0.0  # time [s] the reference has rested at the goal
+        super().reset()
         self._curvature = None  # [1/m] the last commanded omega/v (None before a move)
-
-    @property
-    def ended(self) -> bool:
-        """Whether the run has ended: arrived, passed or timed out."""
-        return self.outcome != _TRACKING
 
     def step(self, x: float, y: float, theta: float, x_d: float, y_d: float, xdot_d: float,
              ydot_d: float, dt: float | None = None, xddot_d: float = 0.0,
@@ -233,13 +259,67 @@ class ArrivingController:
         return v, omega
 
     def _end(self, outcome: float, distance: float, yaw_error: float) -> tuple[float, float]:
-        self.outcome = outcome
-        self.position_error, self.yaw_error = distance, yaw_error
+        self._ended(outcome, distance, yaw_error)
         return 0.0, 0.0
 
-    def telemetry(self) -> tuple:
-        """Return the wrapped controller's telemetry and ``arrival`` (the outcome so far)."""
-        return (*self.controller.telemetry(), self.outcome)
+
+class ArrivingFreeIcr(_Arrival):
+    """
+    A free-ICR controller that stops at the end of its path (rules 2 and 4).
+
+    Parameters
+    ----------
+    controller
+        A free-ICR law: :class:`~nfmr_dlsmc.core.free_icr.FreeIcrController`'s ``step``
+        signature and outputs (v_x, v_y, omega).
+    goal : tuple of float
+        The last point of the reference (x [m], y [m]; a third entry is ignored: the goal's
+        heading is the reference's own, psi_d, once it rests).
+    config : ArrivalConfig
+
+    Attributes
+    ----------
+    outcome, position_error, yaw_error
+        As :class:`ArrivingController`'s.
+
+    """
+
+    def __init__(self, controller, goal, config: ArrivalConfig | None = None):
+        super().__init__(controller, goal[:2], config)
+
+    def step(self, x: float, y: float, psi: float, x_d: float, y_d: float, xdot_d: float,
+             ydot_d: float, psi_d: float, psidot_d: float,
+             dt: float | None = None) -> tuple[float, float, float]:
+        """
+        Run one control period of the wrapped law, or command zero once the run has ended.
+
+        Arguments and return values as ``FreeIcrController.step``'s.
+        """
+        if self.outcome != _TRACKING:
+            return 0.0, 0.0, 0.0
+        config = self.config
+        gx, gy = self.goal
+        reference_distance = math.hypot(x_d - gx, y_d - gy)
+        if reference_distance > config.goal_tolerance:
+            self._left_goal = True
+        elif self._left_goal:
+            distance = math.hypot(x - gx, y - gy)
+            yaw_error = wrap_angle(psi - psi_d)
+            resting = xdot_d == 0.0 and ydot_d == 0.0 and psidot_d == 0.0
+            if (reference_distance <= FINAL_SHARE * config.goal_tolerance and resting
+                    and distance <= config.goal_tolerance
+                    and abs(yaw_error) <= config.yaw_tolerance):
+                return self._end(_ARRIVED, distance, yaw_error)
+            if resting:
+                self._at_rest += self.controller.period if dt is None else dt
+                if self._at_rest > config.goal_timeout:
+                    return self._end(_TIMED_OUT, distance, yaw_error)
+        return self.controller.step(x, y, psi, x_d, y_d, xdot_d, ydot_d, psi_d, psidot_d, dt)
+
+    def _end(self, outcome: float, distance: float,
+             yaw_error: float) -> tuple[float, float, float]:
+        self._ended(outcome, distance, yaw_error)
+        return 0.0, 0.0, 0.0
 
 
 def with_arrival(controller, trajectory, config: ArrivalConfig | None):
@@ -247,11 +327,15 @@ def with_arrival(controller, trajectory, config: ArrivalConfig | None):
     Return ``controller`` stopping at the end of ``trajectory`` when that has one.
 
     A reference with an ``end_pose`` (a path) and an arrival ``config``: the
-    :class:`ArrivingController` around ``controller``; otherwise ``controller`` itself.
+    :class:`ArrivingFreeIcr` around a free-ICR law (its ``motion`` is ``free_icr``), the
+    :class:`ArrivingController` around any other ``controller``; otherwise ``controller``
+    itself.
     """
     goal = getattr(trajectory, 'end_pose', None)
     if goal is None or config is None:
         return controller
+    if getattr(controller, 'motion', 'nonholonomic') == 'free_icr':
+        return ArrivingFreeIcr(controller, goal, config)
     return ArrivingController(controller, goal, config)
 
 

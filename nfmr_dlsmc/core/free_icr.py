@@ -111,6 +111,9 @@ class FreeIcrController(DlsmcLoops, SaturatedController):
 
     """
 
+    #: The motion mode of the law: its step takes a heading reference and returns a twist
+    #: (v_x, v_y, omega); :func:`~nfmr_dlsmc.core.arrival.with_arrival` reads it.
+    motion = 'free_icr'
     #: Names of the values :meth:`telemetry` returns, in order.
     TELEMETRY_FIELDS = ('x_e', 'y_e', 'psi_d', 'psidot_d', 'psi_e', 's_x', 's_y', 'eta_hat',
                         'inner_phase', 'u_x', 'u_y', 'speed_raw', 'omega_raw',

@@ -6,8 +6,8 @@ interface of the analytic trajectories (:mod:`nfmr_dlsmc.core.trajectories`):
 ``sample(t)`` -> ``(x_d, y_d, xdot_d, ydot_d)`` [m, m, m/s, m/s] and
 ``acceleration(t)`` -> ``(xddot_d, yddot_d)`` [m/s^2], for a float or a numpy array ``t``.
 
-The points are untimed, ``(x, y)`` [m], or timed, ``(t, x, y)`` [s, m, m]. The reference is
-built in four steps:
+The points are untimed, ``(x, y)`` [m], or timed, ``(t, x, y)`` [s, m, m], each with a yaw
+[rad] or none (see the heading, below). The reference is built in four steps:
 
 1. Consecutive points closer than :data:`MERGE_DISTANCE` merge (the first is kept); a path
    that turns back on itself (a turn over :data:`CUSP_ANGLE` at a point) is refused, as is
@@ -52,6 +52,38 @@ simulated one: doc/commands.md (``--path``).
 Before the start (t < 0, or before the first stamp) the reference moves along the start
 tangent at the start speed (at rest with the default ``start_speed = 0``: the first point);
 after :attr:`PathTrajectory.duration` it rests at the end point.
+
+The heading. A robot with four independently steered wheels may face another way than it
+moves (the free-ICR mode), so the points may carry its heading: ``from_points(points,
+profile, yaw=...)``, one yaw [rad] a point (the meaning of ``points`` is the same with or
+without; a file's ``yaw`` column, :mod:`nfmr_dlsmc.runtime.path_files`). The yaws are
+unwrapped along the points, each change taken the short way (by at most pi: a turn of more
+needs a point in between). :meth:`PathTrajectory.yaw_reference` then gives psi_d and
+psidot_d (:mod:`nfmr_dlsmc.core.path_heading`), and the steps above change so:
+
+- Step 1: two consecutive points closer than :data:`MERGE_DISTANCE` merge only if their
+  yaws differ by :data:`MERGE_YAW` at most; otherwise the second is a turn on the spot,
+  at the first one's position, and the path is cut there into runs (a cusp is refused
+  within a run only: at a spin the reference is at rest, and may go on in any direction).
+- Steps 2 and 3: each run of at least 2 points is rounded and smoothed on its own, as
+  above; the runs join end to start (a corner at a spin is not rounded: the reference
+  stops on the point).
+- Step 4, untimed: within a run psi is a C1 cubic of the arc length through (s_i, yaw_i),
+  s_i where point i lies on the rounded path (PCHIP slopes: no overshoot; flat at the
+  run's ends), and the speed profile also keeps v |dpsi/ds| <= omega_max,
+  v^2 |d^2psi/ds^2| <= yaw_acceleration / 2 and |dpsi/ds| |dv/dt| <= yaw_acceleration / 2
+  (so |psi''(t)| <= :attr:`PathProfile.yaw_acceleration`). A spin lasts as long as turning
+  at most omega_max and yaw_acceleration takes
+  (:func:`~nfmr_dlsmc.core.path_heading.spin_curve`); meanwhile the position rests on the
+  point (xdot = ydot = 0), and the run after it starts from rest.
+- Step 4, timed: psi is the same cubic of time through (t_i, yaw_i); a spin is two points
+  at one position with two stamps. Stamps that ask for more than omega_max between two
+  points (the turn over the time between their stamps) are refused (the cubic's rate
+  peaks above that mean, as the speed does for v_max).
+
+Before the start psi_d is the first yaw and after the end the last, psidot_d = 0; psidot_d
+is continuous throughout. A path without yaw is built exactly as before, and its
+:meth:`~PathTrajectory.yaw_reference` raises: the caller uses a heading rule of its own.
 """
 
 from array import array
@@ -60,17 +92,22 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
+from nfmr_dlsmc.core.path_heading import heading_bounds, heading_curve, spin_curve, unwrapped
 from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator, PPoly
 from scipy.ndimage import gaussian_filter1d
 
-__all__ = ['CUSP_ANGLE', 'MAX_COORDINATE', 'MAX_STAMP', 'MERGE_DISTANCE', 'MIN_STAMP_STEP',
-           'PathError', 'PathProfile', 'PathTrajectory', 'SMOOTHING', 'stamped_points']
+__all__ = ['CUSP_ANGLE', 'MAX_COORDINATE', 'MAX_STAMP', 'MAX_YAW', 'MERGE_DISTANCE',
+           'MERGE_YAW', 'MIN_STAMP_STEP', 'PathError', 'PathProfile', 'PathTrajectory',
+           'SMOOTHING', 'stamped_points']
 
 #: Consecutive points closer than this merge into the first of them [m].
 MERGE_DISTANCE = 1e-3
+#: Points closer than MERGE_DISTANCE whose yaws differ by more than this do not merge: the
+#: second is a turn on the spot [rad].
+MERGE_YAW = 1e-3
 #: A turn sharper than this at a point is a cusp, refused: the path would reverse [rad].
 CUSP_ANGLE = math.radians(170.0)
 #: Width (standard deviation) of the Gaussian that makes the curvature continuous, as a
@@ -83,6 +120,9 @@ MAX_COORDINATE = 1e8
 #: Latest stamp of a timed path [s]: about 32 years after its start, where a float still
 #: resolves 0.1 us (absolute clock times, 1.7e9 s since 1970, are refused).
 MAX_STAMP = 1e9
+#: Largest |yaw| of a point [rad]: far more turns than a path makes; larger numbers are a
+#: mistake.
+MAX_YAW = 1e6
 #: Least time between the stamps of two points [s]: a millimetre (the least distance of two
 #: points once merged) in less is over 1 km/s, beyond any robot; it keeps the timing's
 #: coefficients finite whatever PathProfile.v_max.
@@ -159,6 +199,10 @@ class PathProfile:
     curvature_rate: float = param(2.5, '1/(m*s)', 'largest |dkappa/dt| = v |dkappa/ds|; '
                                   'double Ackermann steering then turns at most ((L/2)^2 + '
                                   '(T/2)^2) / (L/2) times this, in rad/s', POSITIVE)
+    yaw_acceleration: float = param(2.0, 'rad/s^2', 'largest |d^2 psi/dt^2| of the heading '
+                                    'reference of a path whose points carry a yaw (and the '
+                                    'rate at which a turn on the spot speeds up and slows '
+                                    'down)', POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -178,6 +222,9 @@ class PathTrajectory:
         The points after merging, (N, 2) of x, y [m] (read-only).
     stamps : ndarray or None
         Their times for a timed path, (N,) [s]; None for an untimed one.
+    yaw : ndarray or None
+        Their headings, unwrapped, (N,) [rad]; None for a path without (see
+        :meth:`yaw_reference`).
     profile : PathProfile
         The speed limits and corner radius it was built with.
     length : float
@@ -189,6 +236,7 @@ class PathTrajectory:
 
     points: np.ndarray
     stamps: np.ndarray | None
+    yaw: np.ndarray | None
     profile: PathProfile
     length: float
     duration: float
@@ -200,9 +248,12 @@ class PathTrajectory:
     _t_coef: array
     _start: tuple
     _end: tuple
+    _yaw_phases: tuple
+    _yaw_starts: array
 
     @classmethod
-    def from_points(cls, points, profile: PathProfile | None = None) -> 'PathTrajectory':
+    def from_points(cls, points, profile: PathProfile | None = None, *,
+                    yaw=None) -> 'PathTrajectory':
         """
         Build the reference along ``points``.
 
@@ -217,35 +268,44 @@ class PathTrajectory:
             :data:`MAX_COORDINATE`, stamps at most :data:`MAX_STAMP`.
         profile : PathProfile, optional
             Speed limits and corner radius; the defaults when omitted.
+        yaw : array_like, optional
+            (N,) headings of the robot at the points [rad], for a robot that may face
+            another way than it moves (free-ICR); unwrapped along the points (each change
+            taken the short way, by at most pi: a turn of more needs a point in between).
+            Points closer than :data:`MERGE_DISTANCE` whose yaws differ by more than
+            :data:`MERGE_YAW` do not merge: the second is a turn on the spot (see the
+            module docstring). None (the default): a path without headings, built exactly
+            as without the keyword.
 
         Raises
         ------
         PathError
             (a :class:`~nfmr_dlsmc.core.validation.ParameterError`) for fewer than 2
-            distinct points, a coordinate or stamp that is not a finite number or is out of
-            bounds, a cusp, stamps that do not increase or ask for more than ``v_max``; the
-            message names the point (0 is the first).
+            distinct points, a coordinate, stamp or yaw that is not a finite number or is
+            out of bounds, a cusp, stamps that do not increase or ask for more than
+            ``v_max`` (or, with yaw, a yaw rate above ``omega_max``), ``yaw`` not one
+            heading per point; the message names the point (0 is the first).
 
         """
         profile = PathProfile() if profile is None else profile
         if not isinstance(profile, PathProfile):
             raise TypeError(f'profile must be a PathProfile, not {type(profile).__name__}')
-        xy, stamps, _ = _checked_points(points, profile.v_max)
-        if profile.corner_radius > 0.0:
-            u, dense, vertex_u = _rounded(xy, profile.corner_radius)
-        else:
-            u, dense, vertex_u = _through_points(xy)
-        s, dense, vertex_s = _by_arc_length(u, dense, vertex_u)
-        curve = CubicSpline(s, dense, bc_type='natural')
-        arc = _arc_length(curve)
-        vertex_s = np.interp(vertex_s, s, arc)
-        s = arc
-        curve = CubicSpline(s, dense, bc_type='natural')
+        xy, stamps, _, headings = _checked_points(points, profile.v_max, yaw,
+                                                  profile.omega_max)
+        if headings is not None:
+            return cls._with_yaw(xy, stamps, headings, profile)
+        s, dense, vertex_s, curve = _piece(xy, profile.corner_radius)
         if stamps is None:
             timing = _speed_profile(s, _bend(curve, s), _bend_rate(curve), profile)
         else:
             timing = _timed(stamps, vertex_s)
-        start, end = curve(0.0, 1), curve(s[-1], 1)
+        return cls._built(xy, stamps, None, profile, curve, timing, dense[0], dense[-1], ())
+
+    @classmethod
+    def _built(cls, xy, stamps, headings, profile, curve, timing, first, last,
+               yaw_phases) -> 'PathTrajectory':
+        """Return the reference along ``curve`` [m] timed by ``timing``, s(t) [m]."""
+        start, end = curve(0.0, 1), curve(curve.x[-1], 1)
         tangent0 = start / max(float(np.hypot(*start)), 1e-300)
         speed0 = float(timing(timing.x[0], 1))
         points_out = np.array(xy, dtype=float)
@@ -253,17 +313,92 @@ class PathTrajectory:
         if stamps is not None:
             stamps = np.array(stamps, dtype=float)
             stamps.setflags(write=False)
-        return cls(points=points_out, stamps=stamps, profile=profile, length=float(s[-1]),
-                   duration=float(timing.x[-1]), _curve=curve, _timing=timing,
-                   _s_breaks=array('d', curve.x), _s_coef=array('d', _rows(curve.c)),
-                   _t_breaks=array('d', timing.x), _t_coef=array('d', _rows(timing.c)),
-                   _start=(float(dense[0, 0]), float(dense[0, 1]), float(tangent0[0]),
+        if headings is not None:
+            headings = np.array(headings, dtype=float)
+            headings.setflags(write=False)
+        yaw_phases = tuple((start, end, along, curve_, array('d', curve_.x),
+                            array('d', _rows(curve_.c)))
+                           for start, end, along, curve_ in yaw_phases)
+        return cls(points=points_out, stamps=stamps, yaw=headings, profile=profile,
+                   length=float(curve.x[-1]), duration=float(timing.x[-1]), _curve=curve,
+                   _timing=timing, _s_breaks=array('d', curve.x),
+                   _s_coef=array('d', _rows(curve.c)), _t_breaks=array('d', timing.x),
+                   _t_coef=array('d', _rows(timing.c)),
+                   _start=(float(first[0]), float(first[1]), float(tangent0[0]),
                            float(tangent0[1]), speed0, math.atan2(start[1], start[0])),
-                   _end=(float(dense[-1, 0]), float(dense[-1, 1]),
-                         math.atan2(end[1], end[0])))
+                   _end=(float(last[0]), float(last[1]), math.atan2(end[1], end[0])),
+                   _yaw_phases=yaw_phases,
+                   _yaw_starts=array('d', [phase[0] for phase in yaw_phases]))
+
+    @classmethod
+    def _with_yaw(cls, xy, stamps, headings, profile: PathProfile) -> 'PathTrajectory':
+        """
+        Return the reference along merged points with headings (see the module docstring).
+
+        The path is cut at each spin (a point at the position of the one before, its yaw
+        different) into runs of distinct positions, each rounded and smoothed on its own
+        and joined end to start, the reference at rest at the joint.
+        """
+        runs = _runs(xy)
+        breaks, coefficients = [], []
+        vertex_s = np.zeros(len(xy))
+        offset = 0.0
+        first = last = None
+        shapes = []  # per run: its local s, the yaw curve over it, the speed-profile inputs
+        for a, b in runs:
+            if b == a:
+                vertex_s[a] = offset
+                shapes.append(None)
+                continue
+            s, dense, local_s, curve = _piece(xy[a:b + 1], profile.corner_radius)
+            first = dense[0] if first is None else first
+            last = dense[-1]
+            vertex_s[a:b + 1] = local_s + offset
+            breaks.append(curve.x[1:] + offset if breaks else curve.x + offset)
+            coefficients.append(np.asarray(curve.c))
+            psi = heading_curve(local_s, headings[a:b + 1])
+            shapes.append((s, curve, psi, offset))
+            offset += float(curve.x[-1])
+        curve = PPoly(np.concatenate(coefficients, axis=1), np.concatenate(breaks))
+        if stamps is not None:
+            timing = _timed(stamps, vertex_s)
+            psi_t = heading_curve(stamps, headings)
+            phases = ((float(stamps[0]), float(stamps[-1]), False, psi_t),)
+            return cls._built(xy, stamps, headings, profile, curve, timing, first, last,
+                              phases)
+        t_breaks, t_coefficients, phases = [], [], []
+        now = 0.0
+        for r, ((a, _), shape) in enumerate(zip(runs, shapes)):
+            if r > 0:
+                spin = spin_curve(headings[a - 1], headings[a], profile.omega_max,
+                                  profile.yaw_acceleration)
+                duration = float(spin.x[-1])
+                t_breaks.append(np.array([now, now + duration]) if not t_breaks
+                                else np.array([now + duration]))
+                t_coefficients.append(np.array([[0.0], [0.0], [0.0], [vertex_s[a]]]))
+                phases.append((now, now + duration, False, _shifted(spin, now)))
+                now += duration
+            if shape is None:
+                continue
+            s, piece, psi, base = shape
+            start_speed = profile.start_speed if now == 0.0 else 0.0
+            timing = _speed_profile(s, _bend(piece, s), _bend_rate(piece), profile,
+                                    start_speed, psi)
+            c = np.array(timing.c, dtype=float)
+            c[3] += base
+            t_breaks.append(timing.x + now if not t_breaks else timing.x[1:] + now)
+            t_coefficients.append(c)
+            end = now + float(timing.x[-1])
+            phases.append((now, end, True, _shifted(psi, base)))
+            now = end
+        timing = PPoly(np.concatenate(t_coefficients, axis=1), np.concatenate(t_breaks),
+                       extrapolate=True)
+        return cls._built(xy, None, headings, profile, curve, timing, first, last,
+                          tuple(phases))
 
     def __repr__(self):
         timed = 'timed, ' if self.stamps is not None else ''
+        timed += 'with yaw, ' if self.yaw is not None else ''
         return (f'PathTrajectory({timed}{len(self.points)} points, length {self.length:.3f} m,'
                 f' duration {self.duration:.3f} s)')
 
@@ -295,6 +430,63 @@ class PathTrajectory:
         if isinstance(t, (float, int)):
             return self._state(float(t))[6]
         return self._states(t)[6]
+
+    @property
+    def has_yaw(self) -> bool:
+        """Return whether the points carry headings: :meth:`yaw_reference` is available."""
+        return self.yaw is not None
+
+    def yaw_reference(self, t):
+        """
+        Return the heading reference (psi_d, psidot_d) at ``t`` [s] -> [rad, rad/s].
+
+        psi_d passes through each point's (unwrapped) yaw where the reference passes the
+        point, psidot_d is continuous; before the start psi_d is the first yaw, after
+        :attr:`duration` the last, both at rate 0. ``t`` is a float or an array (then both
+        are arrays shaped as it).
+
+        Raises
+        ------
+        ValueError
+            For a path whose points carry no yaw (:attr:`has_yaw` is False): the caller
+            chooses the heading by a rule of its own.
+
+        """
+        if self.yaw is None:
+            raise ValueError('trajectory.path: the path has no heading reference (its points '
+                             'carry no yaw); check has_yaw and use a heading rule instead')
+        if isinstance(t, (float, int)):
+            return self._yaw_at(float(t))
+        t = np.asarray(t, dtype=float)
+        psi = np.full(t.shape, self.yaw[-1])
+        psi[~(t > self._yaw_phases[0][0])] = self.yaw[0]
+        rate = np.zeros(t.shape)
+        first = self._yaw_phases[0][0]
+        for start, end, along, curve, _, _ in self._yaw_phases:
+            inside = (t >= start) & (t < end) & (t > first)
+            if not inside.any():
+                continue
+            at = t[inside]
+            if along:
+                s, sdot = self._timing(at), self._timing(at, 1)
+                psi[inside], rate[inside] = curve(s), curve(s, 1) * sdot
+            else:
+                psi[inside], rate[inside] = curve(at), curve(at, 1)
+        return psi, rate
+
+    def _yaw_at(self, t: float) -> tuple[float, float]:
+        """Return psi_d, psidot_d at the float ``t`` (the path has yaw)."""
+        phases = self._yaw_phases
+        if not t > phases[0][0]:
+            return float(self.yaw[0]), 0.0
+        if t >= phases[-1][1]:
+            return float(self.yaw[-1]), 0.0
+        _, _, along, _, breaks, coefficients = phases[bisect_right(self._yaw_starts, t) - 1]
+        if along:
+            s, sdot = _cubic(self._t_breaks, self._t_coef, t)
+            psi, slope = _cubic(breaks, coefficients, s)
+            return psi, slope * sdot
+        return _cubic(breaks, coefficients, t)
 
     def geometry(self, s):
         """
@@ -372,6 +564,14 @@ class PathTrajectory:
         return tuple(out)
 
 
+def _cubic(breaks: array, coefficients: array, x: float) -> tuple[float, float]:
+    """Return the value and slope at ``x`` of a cubic PPoly given flat (:func:`_rows`)."""
+    k = min(max(bisect_right(breaks, x), 1), len(breaks) - 1) - 1
+    u = x - breaks[k]
+    c3, c2, c1, c0 = coefficients[4 * k:4 * k + 4]
+    return ((c3 * u + c2) * u + c1) * u + c0, (3.0 * c3 * u + 2.0 * c2) * u + c1
+
+
 # -- the points ---------------------------------------------------------------------------
 
 def stamped_points(xy, stamps) -> np.ndarray:
@@ -405,16 +605,21 @@ def _where(index: int, xy) -> str:
     return f'point {index} at ({x}, {y}) m'
 
 
-def _checked_points(points, v_max: float):
+def _checked_points(points, v_max: float, yaw=None, omega_max: float = math.inf):
     """
-    Return the merged points (M, 2), their stamps (M,) or None, and their input indices.
+    Return the merged points (M, 2), their stamps (M,) or None, input indices and yaws.
+
+    The yaws (M,) [rad] are unwrapped, None without ``yaw``. With yaw a point closer than
+    MERGE_DISTANCE to the one kept before but whose yaw differs by more than MERGE_YAW is
+    kept, at that one's position: a turn on the spot.
 
     Raises
     ------
     PathError
         For an input that is not a list of points, a value that is not a finite number or
         is out of bounds, fewer than 2 distinct points, stamps that do not increase or ask
-        for more than ``v_max`` [m/s], or a cusp.
+        for more than ``v_max`` [m/s] (or a yaw rate above ``omega_max`` [rad/s]), or a
+        cusp.
 
     """
     shape_rule = ('must be a list of points: (N, 2) of x, y [m] or (N, 3) of t, x, y '
@@ -435,6 +640,7 @@ def _checked_points(points, v_max: float):
         what = 'its stamp and coordinates must be' if timed else 'its coordinates must be'
         raise PathError(f'{_where(i, xy_all[i])}: {what} finite numbers', i,
                         tuple(raw[i].tolist()))
+    headings = None if yaw is None else _checked_yaw(yaw, raw, xy_all)
     far = np.flatnonzero((np.abs(xy_all) > MAX_COORDINATE).any(axis=1))
     if far.size:
         i = int(far[0])
@@ -446,6 +652,8 @@ def _checked_points(points, v_max: float):
         raise PathError(f'{_where(i, xy_all[i])}: its stamp {raw[i, 0]:g} s is after '
                         f'{MAX_STAMP:g} s (32 years); stamps count from the start of the '
                         'path', i, tuple(raw[i].tolist()))
+    if headings is not None:
+        return _checked_with_yaw(raw, xy_all, headings, v_max, omega_max)
     kept = []
     for i in range(len(raw)):
         if not kept or math.dist(xy_all[i], xy_all[kept[-1]]) >= MERGE_DISTANCE:
@@ -456,22 +664,13 @@ def _checked_points(points, v_max: float):
                         value=len(raw))
     index = np.array(kept)
     xy = xy_all[index]
-    stamps = None
-    if timed:
-        stamps = raw[index, 0]
-        if stamps[0] < 0.0:
-            i = kept[0]
-            raise PathError(f'{_where(i, xy[0])}: its stamp {stamps[0]:g} s is negative; '
-                            'the reference starts at t = 0', i, tuple(raw[i].tolist()))
-        late = np.flatnonzero(np.diff(stamps) <= 0.0)
-        if late.size:
-            k = int(late[0]) + 1
-            i = kept[k]
-            previous = f"the previous point's {stamps[k - 1]:g} s"
-            raise PathError(f'{_where(i, xy[k])}: its stamp {stamps[k]:g} s does not come '
-                            f'after {previous}; stamps must increase', i,
-                            tuple(raw[i].tolist()))
-        _check_speeds(xy, stamps, kept, raw, v_max)
+    stamps = _checked_stamps(xy, raw, kept, v_max) if timed else None
+    _check_cusps(xy, kept)
+    return xy, stamps, index, None
+
+
+def _check_cusps(xy, kept) -> None:
+    """Refuse a cusp of the distinct points ``xy``, ``kept`` their input indices."""
     _, _, turn = _segments(xy)
     cusp = np.flatnonzero(np.abs(turn) > CUSP_ANGLE)
     if cusp.size:
@@ -481,7 +680,110 @@ def _checked_points(points, v_max: float):
                         f'of {math.degrees(abs(turn[k - 1])):.0f} deg > '
                         f'{math.degrees(CUSP_ANGLE):.0f} deg); reversing is not supported',
                         i, tuple(xy[k].tolist()))
-    return xy, stamps, index
+
+
+def _checked_yaw(yaw, raw, xy_all) -> np.ndarray:
+    """Return ``yaw`` [rad], one finite value per point of ``raw``, unwrapped."""
+    rule = f'yaw must hold one heading per point [rad]: {len(raw)} numbers'
+    try:
+        headings = np.asarray(yaw, dtype=float)
+    except (TypeError, ValueError):
+        raise PathError(rule) from None
+    if headings.shape != (len(raw),):
+        raise PathError(f'{rule}; got shape {headings.shape}', value=headings.shape)
+    bad = np.flatnonzero(~(np.abs(headings) <= MAX_YAW))
+    if bad.size:
+        i = int(bad[0])
+        what = ('is not a finite number' if not np.isfinite(headings[i])
+                else f'is beyond +-{MAX_YAW:g} rad')
+        raise PathError(f'{_where(i, xy_all[i])}: its yaw {headings[i]:g} {what}', i,
+                        (*raw[i].tolist(), float(headings[i])))
+    return unwrapped(headings)
+
+
+def _checked_with_yaw(raw, xy_all, headings, v_max: float, omega_max: float):
+    """Return what :func:`_checked_points` does, for checked points with yaws."""
+    kept = []
+    xy = []
+    for i in range(len(raw)):
+        if kept and math.dist(xy_all[i], xy[-1]) < MERGE_DISTANCE:
+            if abs(headings[i] - headings[kept[-1]]) <= MERGE_YAW:
+                continue
+            xy.append(xy[-1])  # a turn on the spot, where the point before is
+        else:
+            xy.append(xy_all[i])
+        kept.append(i)
+    xy = np.array(xy, dtype=float).reshape(-1, 2)
+    distinct = sum(1 for k in range(len(kept)) if k == 0 or (xy[k] != xy[k - 1]).any())
+    if distinct < 2:
+        raise PathError(f'{distinct} distinct position(s) ({len(raw)} points given; points '
+                        f'closer than {MERGE_DISTANCE * 1e3:g} mm merge or turn on the '
+                        'spot): a path needs at least 2', value=len(raw))
+    index = np.array(kept)
+    psi = headings[index]
+    stamps = None
+    if raw.shape[1] == 3:
+        stamps = _checked_stamps(xy, raw, kept, v_max)
+        _check_yaw_rates(xy, stamps, psi, kept, raw, omega_max)
+    for a, b in _runs(xy):
+        _check_cusps(xy[a:b + 1], kept[a:b + 1])
+    return xy, stamps, index, psi
+
+
+def _check_yaw_rates(xy, stamps, psi, kept, raw, omega_max: float) -> None:
+    """Refuse stamps asking for a yaw rate above ``omega_max`` [rad/s] between two points."""
+    step = np.diff(stamps)
+    turn = np.abs(np.diff(psi))
+    with np.errstate(over='ignore'):
+        fast = np.flatnonzero(turn > omega_max * step)
+    if fast.size:
+        k = int(fast[0]) + 1
+        i = kept[k]
+        angle, seconds = float(turn[k - 1]), float(step[k - 1])
+        raise PathError(f'{_where(i, xy[k])}: the stamps ask for a yaw rate of '
+                        f'{angle / seconds:.3g} rad/s between this point and the one before '
+                        f"({angle:.3g} rad in {seconds:.3g} s); the robot's omega_max is "
+                        f'{omega_max:g} rad/s', i, tuple(raw[i].tolist()))
+
+
+def _runs(xy) -> list[tuple[int, int]]:
+    """
+    Return the runs of ``xy`` between its turns on the spot, (first, last) indices.
+
+    A point at the very position of the one before starts a new run; a run of one point is
+    a position the robot only turns at.
+    """
+    runs, first = [], 0
+    for k in range(1, len(xy)):
+        if (xy[k] == xy[k - 1]).all():
+            runs.append((first, k - 1))
+            first = k
+    runs.append((first, len(xy) - 1))
+    return runs
+
+
+def _checked_stamps(xy, raw, kept, v_max: float) -> np.ndarray:
+    """
+    Return the stamps of the kept points (column 0 of ``raw``), checked.
+
+    ``xy`` are the kept points, ``kept`` their indices in ``raw``. A negative first stamp,
+    stamps that do not increase or ask for more than ``v_max`` [m/s] between two points
+    raise :class:`PathError` naming the point.
+    """
+    stamps = raw[np.array(kept), 0]
+    if stamps[0] < 0.0:
+        i = kept[0]
+        raise PathError(f'{_where(i, xy[0])}: its stamp {stamps[0]:g} s is negative; '
+                        'the reference starts at t = 0', i, tuple(raw[i].tolist()))
+    late = np.flatnonzero(np.diff(stamps) <= 0.0)
+    if late.size:
+        k = int(late[0]) + 1
+        i = kept[k]
+        previous = f"the previous point's {stamps[k - 1]:g} s"
+        raise PathError(f'{_where(i, xy[k])}: its stamp {stamps[k]:g} s does not come '
+                        f'after {previous}; stamps must increase', i, tuple(raw[i].tolist()))
+    _check_speeds(xy, stamps, kept, raw, v_max)
+    return stamps
 
 
 def _check_speeds(xy, stamps, kept, raw, v_max: float) -> None:
@@ -522,6 +824,31 @@ def _segments(xy):
 
 
 # -- the curve ------------------------------------------------------------------------------
+
+def _piece(xy, corner_radius: float):
+    """
+    Return the curve through distinct points ``xy``: s, samples, s at the points, spline.
+
+    Steps 2 and 3 of the module docstring: s [m] is the spline's arc length at its
+    breakpoints, the samples (n, 2) [m] the smoothed rounded polyline at them.
+    """
+    if corner_radius > 0.0:
+        u, dense, vertex_u = _rounded(xy, corner_radius)
+    else:
+        u, dense, vertex_u = _through_points(xy)
+    s, dense, vertex_s = _by_arc_length(u, dense, vertex_u)
+    curve = CubicSpline(s, dense, bc_type='natural')
+    arc = _arc_length(curve)
+    vertex_s = np.interp(vertex_s, s, arc)
+    s = arc
+    curve = CubicSpline(s, dense, bc_type='natural')
+    return s, dense, vertex_s, curve
+
+
+def _shifted(curve: PPoly, offset: float) -> PPoly:
+    """Return ``curve`` moved by ``offset`` along its abscissa."""
+    return PPoly(np.asarray(curve.c), np.asarray(curve.x) + offset)
+
 
 def _intervals(length: float, spacing: float) -> int:
     """Return how many intervals resample ``length`` [m] at about ``spacing`` [m]."""
@@ -716,27 +1043,35 @@ def _rows(coefficients) -> np.ndarray:
 
 # -- the timing -----------------------------------------------------------------------------
 
-def _speed_profile(s, bend, bend_rate, profile: PathProfile) -> PPoly:
+def _speed_profile(s, bend, bend_rate, profile: PathProfile, start_speed: float | None = None,
+                   heading: PPoly | None = None) -> PPoly:
     """
     Return s(t) for the speed limits of ``profile`` along the samples ``s``.
 
     ``bend`` is |kappa| [1/m] and ``bend_rate`` |dkappa/ds| [1/m^2] at the samples. v^2 is
     limited at each sample by the cruise speed, lateral acceleration, yaw rate and
-    curvature rate, then by a forward pass (acceleration, from the start speed) and a
-    backward pass (deceleration, to rest at the end); both passes are running minima of
-    v^2 +- 2 a s.
+    curvature rate, then by a forward pass (acceleration, from the start speed,
+    ``profile.start_speed`` unless given) and a backward pass (deceleration, to rest at the
+    end); both passes are running minima of v^2 +- 2 a s. With a ``heading`` psi(s) [rad]
+    the yaw rate v |psi'| is at most omega_max and psi'' v^2 + psi' dv/dt at most
+    yaw_acceleration, half of it for each term: v^2 |psi''| and |psi'| |dv/dt|, so that
+    the passes' acceleration varies from one interval to the next.
     """
     with np.errstate(divide='ignore', over='ignore'):
         limit = np.minimum(profile.lateral_acceleration / bend,
                            (profile.omega_max / bend) ** 2)
         limit = np.minimum(limit, (profile.curvature_rate / bend_rate) ** 2)
     limit = np.minimum(limit, profile.speed ** 2)
-    limit[0] = min(profile.start_speed ** 2, limit[0])
-    ramp = 2.0 * profile.acceleration * s
-    squared = ramp + np.minimum.accumulate(limit - ramp)
-    squared[-1] = 0.0
-    ramp = 2.0 * profile.deceleration * (s[-1] - s)
-    squared = ramp + np.minimum.accumulate((squared - ramp)[::-1])[::-1]
+    start_speed = profile.start_speed if start_speed is None else start_speed
+    limit[0] = min(start_speed ** 2, limit[0])
+    if heading is None:
+        ramp = 2.0 * profile.acceleration * s
+        squared = ramp + np.minimum.accumulate(limit - ramp)
+        squared[-1] = 0.0
+        ramp = 2.0 * profile.deceleration * (s[-1] - s)
+        squared = ramp + np.minimum.accumulate((squared - ramp)[::-1])[::-1]
+    else:
+        squared = _yaw_limited(s, limit, heading, profile)
     v = np.sqrt(np.maximum(squared, 0.0))
     v[-1] = 0.0
     ds = np.diff(s)
@@ -744,6 +1079,25 @@ def _speed_profile(s, bend, bend_rate, profile: PathProfile) -> PPoly:
     a = (v[1:] - v[:-1]) / dt
     coefficients = np.vstack([np.zeros_like(a), a / 2.0, v[:-1], s[:-1]])
     return PPoly(coefficients, np.r_[0.0, np.cumsum(dt)], extrapolate=True)
+
+
+def _yaw_limited(s, limit, heading: PPoly, profile: PathProfile) -> np.ndarray:
+    """Return v^2 [m^2/s^2] at ``s`` under ``limit`` and the limits of the ``heading``."""
+    slope, bend = heading_bounds(heading, s)
+    half = profile.yaw_acceleration / 2.0
+    at_slope = np.maximum(np.r_[slope, 0.0], np.r_[0.0, slope])
+    at_bend = np.maximum(np.r_[bend, 0.0], np.r_[0.0, bend])
+    with np.errstate(divide='ignore', over='ignore'):
+        limit = np.minimum(limit, (profile.omega_max / at_slope) ** 2)
+        limit = np.minimum(limit, half / at_bend)
+        share = half / slope
+    ds = np.diff(s)
+    ramp = np.r_[0.0, np.cumsum(2.0 * np.minimum(profile.acceleration, share) * ds)]
+    squared = ramp + np.minimum.accumulate(limit - ramp)
+    squared[-1] = 0.0
+    down = 2.0 * np.minimum(profile.deceleration, share) * ds
+    ramp = np.r_[np.cumsum(down[::-1])[::-1], 0.0]
+    return ramp + np.minimum.accumulate((squared - ramp)[::-1])[::-1]
 
 
 def _timed(stamps, vertex_s) -> PPoly:

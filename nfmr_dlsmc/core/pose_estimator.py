@@ -170,7 +170,9 @@ class PoseEstimator:
         Predict over ``dt`` [s] with input u = (v, omega): eq. (3), forward Euler.
 
         x' = x + (v + b_v) cos(theta) dt, y' = y + (v + b_v) sin(theta) dt,
-        theta' = theta + (omega + b_omega) dt; the biases walk.
+        theta' = theta + (omega + b_omega) dt; the biases walk. A free-ICR command (D36)
+        u = (v_x, omega, v_y) adds the sideways speed: x' -= v_y sin(theta) dt,
+        y' += v_y cos(theta) dt (the speed bias stays along the heading).
         """
         if dt <= 0.0:
             return x, P
@@ -178,9 +180,15 @@ class PoseEstimator:
             return _OVERFLOWED  # stays so: pose() reports it and the caller resets
         v, w = u[0] + x[3], u[1] + x[4]
         c, s = math.cos(x[2]), math.sin(x[2])
-        x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt, x[3], x[4]])
         F = np.eye(_N)
-        F[0, 2], F[1, 2] = -v * s * dt, v * c * dt
+        if len(u) == 3:
+            side = u[2]
+            x = np.array([x[0] + (v * c - side * s) * dt, x[1] + (v * s + side * c) * dt,
+                          x[2] + w * dt, x[3], x[4]])
+            F[0, 2], F[1, 2] = -(v * s + side * c) * dt, (v * c - side * s) * dt
+        else:
+            x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt, x[3], x[4]])
+            F[0, 2], F[1, 2] = -v * s * dt, v * c * dt
         F[0, 3], F[1, 3], F[2, 4] = c * dt, s * dt, dt
         return x, F @ P @ F.T + self._q * dt
 
@@ -317,7 +325,10 @@ class PoseEstimator:
         dt = t - t0
         if dt > 0.0:
             step = (u[0] + x[3]) * dt
-            px, py = px + step * math.cos(x[2]), py + step * math.sin(x[2])
+            c, s = math.cos(x[2]), math.sin(x[2])
+            px, py = px + step * c, py + step * s
+            if len(u) == 3:  # the free-ICR command's sideways speed
+                px, py = px - u[2] * dt * s, py + u[2] * dt * c
             gain = -math.expm1(-dt / self.config.correction_smoothing)
             px, py = px + gain * (x[0] - px), py + gain * (x[1] - py)
             self._output = (t, px, py)
@@ -331,10 +342,16 @@ class PoseEstimator:
         x = self._post[1]
         return float(x[3]), float(x[4])
 
-    def command(self, v: float, omega: float) -> None:
-        """Record the command of the latest tick: it drives the prediction from there."""
+    def command(self, v: float, omega: float, v_y: float | None = None) -> None:
+        """
+        Record the command of the latest tick: it drives the prediction from there.
+
+        ``v`` [m/s] along the heading, ``omega`` [rad/s]; ``v_y`` [m/s] sideways, of a
+        free-ICR command (D36), None for the unicycle's.
+        """
         if self._ticks:
-            self._ticks[-1].u = (float(v), float(omega))
+            self._ticks[-1].u = ((float(v), float(omega)) if v_y is None
+                                 else (float(v), float(omega), float(v_y)))
 
     # -- delayed messages ------------------------------------------------------------------
 

@@ -22,19 +22,28 @@ c'_i; for a point outside the range the order of the distances is that of the ra
 end):
 
     k_i = round((c'_i - phi_i) / pi),   delta_i = phi_i + k_i pi,                          (2)
-    then  delta_i -= pi, k_i -= 1  if delta_i > delta_max,
-          delta_i += pi, k_i += 1  if delta_i < -delta_max.
+    then  delta_i = delta_max                 if delta_max < delta_i <= delta_max + m,
+          delta_i -= pi, k_i -= 1             if delta_i > delta_max + m,
+          and the same mirrored below -delta_max.
 
-The unconstrained nearest angle lies within pi/2 of c'_i; one step of pi back into the range
-reaches the nearest one inside it, which exists since delta_max >= pi/2. A tie (both within
-pi/2 and equally near) goes to the even k, forward (``round`` rounds half to even). The set
-point never jumps by pi where the range allows the nearer angle: a change beyond pi/2
-happens only where the range makes a wheel unwind.
+m (``reverse_margin``) is a hysteresis at the range's ends: a wheel at the end whose
+direction lies just beyond it stays at the end, rolling up to m off the direction, rather
+than reversing by pi. Without it (m = 0) a wheel driving sideways with delta_max = pi/2
+flips by pi each time the outer loop's correction tips the direction past the side. The
+law corrects the small error as it corrects any other.
+
+The unconstrained nearest angle lies within pi/2 of c'_i; one step of pi back into the
+range (beyond the margin) reaches the nearest one inside it, which exists since
+delta_max >= pi/2. A tie (both within pi/2 and equally near) goes to the even k, forward
+(``round`` rounds half to even). The set point never jumps by pi where the range allows
+the nearer angle: a change beyond pi/2 happens only where the range makes a wheel unwind.
 
 The drive speed [rad/s] is scaled by the cosine of the steer error left, so that a wheel
 still turning pushes only along its present heading and never against the motion:
 
     w_i = (-1)^k_i (s_i / r) max(0, cos(delta_i - c_i)).                                   (3)
+
+(delta_i the set point: at the end of the range when the margin holds it there.)
 
 A wheel slower than s_min (``min_wheel_speed``) keeps its angle and stands: delta_i = c'_i,
 w_i = 0. This covers the zero twist and an ICR on a wheel or within s_min / |omega| of it,
@@ -56,7 +65,7 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
-from nfmr_dlsmc.core.schema import check_fields, documented, param, POSITIVE, Rule
+from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE, Rule
 from nfmr_dlsmc.core.steering import RobotGeometry
 from nfmr_dlsmc.core.validation import check_finite, ParameterError
 import numpy as np
@@ -91,6 +100,9 @@ class SwerveConfig:
     align_tolerance: float = param(0.05, 'rad', 'aligned: every wheel within this of its set '
                                    'point (epsilon); drive on', POSITIVE,
                                    also='< steer_rate * align_time')
+    reverse_margin: float = param(0.1, 'rad', 'a wheel whose direction lies up to this beyond '
+                                  'steer_limit stays at the limit instead of reversing (m; '
+                                  '0: reverse at once)', NON_NEGATIVE)
     min_wheel_speed: float = param(1e-3, 'm/s', 'a wheel slower than this (at or near the '
                                    'ICR, or no twist) keeps its angle and stands (s_min)',
                                    POSITIVE)
@@ -180,11 +192,12 @@ def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry:
             continue
         phi = math.atan2(uy, ux)
         k = round((held - phi) / math.pi)  # eq. (2)
-        if phi + k * math.pi > limit:
-            k -= 1
-        elif phi + k * math.pi < -limit:
-            k += 1
         delta = phi + k * math.pi
+        if delta > limit + config.reverse_margin:
+            k -= 1
+        elif delta < -limit - config.reverse_margin:
+            k += 1
+        delta = min(max(phi + k * math.pi, -limit), limit)  # within the margin: held at the end
         rate = (-wheel_speed if k % 2 else wheel_speed) / geometry.wheel_radius  # [rad/s]
         steer.append(delta)
         speed.append(rate * max(0.0, math.cos(delta - c)))  # eq. (3)

@@ -1,9 +1,15 @@
-"""Closed-loop simulation of the unicycle kinematics (3) under a controller."""
+"""
+Closed-loop simulation of the unicycle kinematics (3) under a controller.
+
+And of the omnidirectional kinematics of the free-ICR mode (D36, :func:`simulate_free_icr`):
+the chassis centre moves with the body-frame twist (v_x, v_y, omega).
+"""
 
 from dataclasses import dataclass, replace
 import math
 
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
+from nfmr_dlsmc.core.heading_reference import heading_reference, HeadingConfig
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
@@ -37,6 +43,9 @@ class SimResult:
         Commanded steer angles [rad], FL FR RL RR (plants with wheels only).
     steer_joint_velocity : ndarray, shape (N, 4), or None
         Measured steer joint rates [rad/s] (the pybullet plant only).
+    v_y : ndarray or None
+        Sideways speed [m/s] of the free-ICR mode (``v`` is then v_x, along the heading);
+        None for the unicycle.
 
     """
 
@@ -51,6 +60,7 @@ class SimResult:
     final_state: np.ndarray
     steer: np.ndarray | None = None
     steer_joint_velocity: np.ndarray | None = None
+    v_y: np.ndarray | None = None
 
     @property
     def distance_error(self) -> np.ndarray:
@@ -180,3 +190,54 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
         t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[4],
         disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[5:])),
         dt=dt, final_state=np.array([x, y, theta]))
+
+
+def simulate_free_icr(controller, trajectory, heading: HeadingConfig, x0, duration: float,
+                      dt: float = 0.001,
+                      disturbance: YawRateDisturbance | None = None) -> SimResult:
+    """
+    Run a free-ICR ``controller`` against the omnidirectional kinematics, forward Euler.
+
+    Per step k: the controller sees the centre's pose, the reference at t_k and its heading
+    (:func:`~nfmr_dlsmc.core.heading_reference.heading_reference` with ``heading``) and
+    returns (v_x, v_y, omega); then
+
+        x += (v_x cos(psi) - v_y sin(psi)) dt,   y += (v_x sin(psi) + v_y cos(psi)) dt,
+        psi += (omega + varpi(t_k)) dt.
+
+    Parameters
+    ----------
+    controller
+        With ``reset()``, ``step(x, y, psi, x_d, y_d, xdot_d, ydot_d, psi_d, psidot_d,
+        dt) -> (v_x, v_y, omega)``, ``telemetry()`` and ``TELEMETRY_FIELDS``
+        (:class:`~nfmr_dlsmc.core.free_icr.FreeIcrController`, perhaps with arrival).
+    trajectory, x0, duration, dt, disturbance
+        As :func:`simulate` takes them; x0 is the centre's pose.
+    heading : HeadingConfig
+        The heading rule of a reference without a heading of its own.
+
+    """
+    x0, n = check_start(controller, x0, duration, dt)
+    x, y, psi = x0
+    t = np.arange(n) * dt
+    ref, _ = sample_reference(trajectory, t)
+    dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
+    controller.reset()
+    width = 6 + len(controller.TELEMETRY_FIELDS)
+    rows = np.empty((n, width))
+    cos, sin = math.cos, math.sin
+    for k, (t_k, x_d, y_d, xdot_d, ydot_d, varpi) in enumerate(
+            zip(t.tolist(), *ref.T.tolist(), dist.tolist())):
+        psi_d, psidot_d = heading_reference(trajectory, heading, t_k)
+        v_x, v_y, w = controller.step(x, y, psi, x_d, y_d, xdot_d, ydot_d, psi_d, psidot_d,
+                                      None)
+        rows[k] = (x, y, psi, v_x, v_y, w) + controller.telemetry()
+        c, s = cos(psi), sin(psi)
+        x += (v_x * c - v_y * s) * dt
+        y += (v_x * s + v_y * c) * dt
+        psi += (w + varpi) * dt
+    columns = rows.T
+    return SimResult(
+        t=t, state=columns[:3].T.copy(), reference=ref, v=columns[3], omega=columns[5],
+        disturbance=dist, telemetry=dict(zip(controller.TELEMETRY_FIELDS, columns[6:])),
+        dt=dt, final_state=np.array([x, y, psi]), v_y=columns[4])

@@ -22,6 +22,10 @@ classes (:mod:`nfmr_dlsmc.core.schema`):
   (:class:`~nfmr_dlsmc.core.steering.RobotGeometry`);
 - ``estimator.*`` (:class:`~nfmr_dlsmc.core.pose_estimator.EstimatorConfig`);
 - ``fusion.*`` (:class:`~nfmr_dlsmc.core.fix_fusion.FusionConfig`);
+- ``motion`` (``nonholonomic``, the paper's; ``free_icr``: position and heading apart,
+  D36) with the heading rule ``heading.*``
+  (:class:`~nfmr_dlsmc.core.heading_reference.HeadingConfig`) and the wheel mapping
+  ``swerve.*`` (:class:`~nfmr_dlsmc.core.swerve_kinematics.SwerveConfig`) of that mode;
 - the node's own options (:class:`NodeOptions`).
 
 Unknown names are errors, so a typo never silently leaves a default in place.
@@ -34,7 +38,9 @@ from nfmr_dlsmc.baselines.registry import gain_sections
 from nfmr_dlsmc.core.arrival import ArrivalConfig, check_goal_reach
 from nfmr_dlsmc.core.errors import NfmrError
 from nfmr_dlsmc.core.fix_fusion import FusionConfig
+from nfmr_dlsmc.core.free_icr import MOTION, MOTIONS
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, InputLimits, OuterLoopGains
+from nfmr_dlsmc.core.heading_reference import check_heading_rate, HeadingConfig
 from nfmr_dlsmc.core.path_reference import PathProfile
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.schema import (
@@ -53,6 +59,7 @@ from nfmr_dlsmc.core.schema import (
     Rule,
 )
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode
+from nfmr_dlsmc.core.swerve_kinematics import SwerveConfig
 from nfmr_dlsmc.core.trajectories import make_trajectory, TRAJECTORY_TYPES
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime import ros_yaml
@@ -70,6 +77,13 @@ class ParamsFileError(NfmrError, ValueError):
 _CONTROL_RATE = Param('control_rate', float, 1.0 / DlsmcConfig.dt, 'Hz',
                       'control rate; the control period is its inverse (paper: 1 kHz)',
                       POSITIVE, read_only=True)
+#: How the robot moves: the paper's unicycle, or position and heading apart (D36).
+_MOTION = Param('motion', str, MOTIONS[0], '', "nonholonomic: the paper's law, the heading "
+                'along the motion; free_icr: the chassis centre moves any way and the heading '
+                'follows its own reference (heading.*, or the heading column of a path), the '
+                'wheels set by swerve.*', MOTION, read_only=True)
+#: How long an analytic reference's heading rate is checked for [s] (it has no end).
+_HEADING_CHECK_SPAN = 100.0
 #: The reference that is not an analytic trajectory: a path file's points.
 PATH = 'path'
 _TRAJECTORY_NAME = Param('trajectory.name', str, 'sine', '', 'the reference tracked: the '
@@ -109,6 +123,10 @@ class ControllerParams:
         omega_max=InputLimits().omega_max, v_max=InputLimits().v_max))
     #: When a robot following a path has arrived (unused by the analytic references).
     arrival: ArrivalConfig = field(default_factory=ArrivalConfig)
+    #: The paper's unicycle or the free-ICR mode (D36), its heading rule and wheel mapping.
+    motion: str = MOTIONS[0]
+    heading: HeadingConfig = field(default_factory=HeadingConfig)
+    swerve: SwerveConfig = field(default_factory=SwerveConfig)
 
 
 @documented
@@ -361,7 +379,8 @@ def controller_parameters() -> list[Param]:
     law = [p for p in params_of(DlsmcConfig) if p.name != 'dt']  # as control_rate
     return [_CONTROL_RATE, *law, *params_of(OuterLoopGains), *params_of(InnerLoopGains),
             *params_of(InputLimits), *params_of(RobotGeometry), *_trajectory_parameters(),
-            *params_of(SteerMode), *params_of(EstimatorConfig), *params_of(FusionConfig),
+            *params_of(SteerMode), _MOTION, *params_of(HeadingConfig),
+            *params_of(SwerveConfig), *params_of(EstimatorConfig), *params_of(FusionConfig),
             *params_of(WheelJoints), *params_of(NodeOptions)]
 
 
@@ -397,7 +416,8 @@ def controller_params(flat: dict) -> ControllerParams:
     if 'steering.j2' not in given and isinstance(j1, (int, float)):
         given['steering.j2'] = 1.0 - j1  # the only j2 SteerMode accepts
     mode = from_flat(SteerMode, given)
-    if mode.is_crab:
+    motion = _MOTION.check(flat.get(_MOTION.name, _MOTION.default))
+    if mode.is_crab and motion == 'nonholonomic':
         raise ParameterError('steering.j1', mode.j1, 'must be > -1: the DLSMC steers by yawing, '
                              'which crab mode (j1 = -1) cannot')
     path_profile = from_flat(PathProfile, flat, omega_max=dlsmc.limits.omega_max,
@@ -408,6 +428,10 @@ def controller_params(flat: dict) -> ControllerParams:
         check_goal_reach(reference, arrival)
     else:
         reference = _analytic_reference(trajectory_name, own, trajectory)
+    heading = from_flat(HeadingConfig, flat)
+    if motion == 'free_icr':
+        check_heading_rate(reference, heading, dlsmc.limits.omega_max,
+                           getattr(reference, 'duration', _HEADING_CHECK_SPAN))
     return ControllerParams(dlsmc=dlsmc,
                             trajectory=reference,
                             trajectory_name=trajectory_name,
@@ -417,7 +441,10 @@ def controller_params(flat: dict) -> ControllerParams:
                             fusion=from_flat(FusionConfig, flat),
                             joints=from_flat(WheelJoints, flat),
                             path_profile=path_profile,
-                            arrival=arrival)
+                            arrival=arrival,
+                            motion=motion,
+                            heading=heading,
+                            swerve=from_flat(SwerveConfig, flat))
 
 
 def _analytic_reference(name: str, own: str, values: dict):

@@ -4,10 +4,16 @@ Path files: the points of a path to follow (:mod:`nfmr_dlsmc.core.path_reference
 Two formats, told apart by the file's suffix:
 
 - CSV (any suffix but ``.yaml``/``.yml``): a header naming the columns, ``x,y`` [m] or
-  ``t,x,y`` [s, m, m] (in any order, any case, spaces around the commas allowed), then
-  one point a line. Blank lines and ``#`` comments are skipped.
-- YAML (``.yaml``/``.yml``): a list of ``[x, y]`` or ``[t, x, y]``, or a mapping whose one
-  key ``points`` holds that list.
+  ``t,x,y`` [s, m, m], each optionally with ``yaw`` [rad] (``x,y,yaw``, ``t,x,y,yaw``; in
+  any order, any case, spaces around the commas allowed), then one point a line. Blank
+  lines and ``#`` comments are skipped.
+- YAML (``.yaml``/``.yml``): a list of points, or a mapping whose one key ``points`` holds
+  that list. A point is ``[x, y]`` or ``[t, x, y]``, or a mapping ``{x: , y: }`` with
+  optional keys ``t`` and ``yaw``.
+
+The yaw is the robot's heading at the point, for a robot that may face another way than it
+moves (:meth:`~nfmr_dlsmc.core.path_reference.PathTrajectory.from_points`, keyword
+``yaw``): a path has it on every point or on none.
 
 Both are UTF-8 text (a byte-order mark, as spreadsheets write it, is skipped), at most
 :data:`MAX_FILE_SIZE`; only a regular file is read (not a device, FIFO or socket).
@@ -24,7 +30,8 @@ from nfmr_dlsmc.core.path_reference import PathError, PathProfile, PathTrajector
 import numpy as np
 import yaml
 
-__all__ = ['MAX_FILE_SIZE', 'PathFileError', 'load_path', 'load_path_trajectory']
+__all__ = ['MAX_FILE_SIZE', 'PathFileError', 'load_path', 'load_path_trajectory',
+           'load_path_yaw']
 
 #: Largest path file read [bytes]: 8 MiB, 400,000 points of CSV, 20 times the intervals a
 #: path is resampled to at most. Such a CSV reads in 2 s; YAML, parsed 30 times slower, in
@@ -34,10 +41,21 @@ MAX_FILE_SIZE = 8 * 2 ** 20
 #: The columns a path has: untimed and timed, in the order :func:`load_path` returns them.
 _UNTIMED = ('x', 'y')
 _TIMED = ('t', 'x', 'y')
+#: The optional column of the robot's heading [rad].
+_YAW = 'yaw'
+#: Every column a path file may name.
+_COLUMNS = _TIMED + (_YAW,)
 #: What a CSV header must look like, for the messages.
-_HEADER_HINT = "the header names the columns: 'x,y' [m] or 't,x,y' [s, m, m]"
+_HEADER_HINT = ("the header names the columns: 'x,y' [m] or 't,x,y' [s, m, m], with 'yaw' "
+                '[rad] or without')
+#: What a YAML point is, for the messages.
+_POINT_HINT = ('a point is a list [x, y] or [t, x, y], or a mapping {x: , y: } with t: [s] '
+               'and yaw: [rad] or without')
 #: What a YAML file must hold, for the messages.
-_YAML_HINT = 'a list of points [x, y] or [t, x, y] (or a mapping with the key points: holding it)'
+_YAML_HINT = ('a list of points [x, y] or [t, x, y] or {x: , y: , yaw: } (or a mapping with '
+              'the key points: holding it)')
+#: Why the yaw is on every point or on none, for the messages.
+_ALL_OR_NONE = 'a path has a yaw on every point or on none'
 #: The files that are not regular files, by their type, as the messages name them.
 _SPECIAL_FILES = {stat.S_IFCHR: 'a character device', stat.S_IFBLK: 'a block device',
                   stat.S_IFIFO: 'a FIFO', stat.S_IFSOCK: 'a socket'}
@@ -90,17 +108,39 @@ def load_path(file) -> np.ndarray:
     -------
     ndarray
         (N, 2) of x, y [m], or (N, 3) of t, x, y [s, m, m] for a timed path, whatever the
-        order of the CSV columns; the rows in the file's order.
+        order of the CSV columns; the rows in the file's order. A yaw column is checked but
+        not returned (:func:`load_path_yaw` returns it).
 
     Raises
     ------
     PathFileError
         For a missing or unreadable file, a directory or another file that is not a regular
         one, one larger than :data:`MAX_FILE_SIZE`, an empty one, a missing or unknown
-        column, a field that is not a finite number, or rows of different lengths.
+        column, a field that is not a finite number, rows of different lengths, or a yaw on
+        some points but not all.
 
     """
     return _read(file)[0]
+
+
+def load_path_yaw(file) -> tuple[np.ndarray, np.ndarray | None]:
+    """
+    Return the points of a path file and their yaws.
+
+    Returns
+    -------
+    tuple
+        The points as :func:`load_path` returns them, and (N,) yaws [rad] as the file gives
+        them (not unwrapped), or None for a file without a yaw column.
+
+    Raises
+    ------
+    PathFileError
+        As :func:`load_path`.
+
+    """
+    points, headings, _ = _read(file)
+    return points, headings
 
 
 def load_path_trajectory(file, profile: PathProfile | None = None) -> PathTrajectory:
@@ -114,16 +154,16 @@ def load_path_trajectory(file, profile: PathProfile | None = None) -> PathTrajec
         do not increase, fewer than 2 distinct points), naming the line of the point.
 
     """
-    points, lines = _read(file)
+    points, headings, lines = _read(file)
     try:
-        return PathTrajectory.from_points(points, profile)
+        return PathTrajectory.from_points(points, profile, yaw=headings)
     except PathError as exc:
         line = None if exc.index is None else lines[exc.index]
         raise PathFileError(file, exc.rule, line) from None
 
 
-def _read(file) -> tuple[np.ndarray, list[int]]:
-    """Return the points of ``file`` and the line each comes from."""
+def _read(file) -> tuple[np.ndarray, np.ndarray | None, list[int]]:
+    """Return the points of ``file``, their yaws or None, and the line each comes from."""
     path = Path(file)
     try:
         text = _text(file, path)
@@ -138,7 +178,9 @@ def _read(file) -> tuple[np.ndarray, list[int]]:
     else:
         rows, lines, names = _csv_rows(file, text)
     order = [names.index(name) for name in (_TIMED if 't' in names else _UNTIMED)]
-    return np.array(rows, dtype=float)[:, order], lines
+    table = np.array(rows, dtype=float)
+    headings = table[:, names.index(_YAW)] if _YAW in names else None
+    return table[:, order], headings, lines
 
 
 def _text(file, path: Path) -> str:
@@ -188,10 +230,17 @@ def _csv_rows(file, text: str):
             names = _header(file, number, cells)
             header_line = number
             continue
+        if _YAW in names and (len(cells) == len(names) - 1 and names[-1] == _YAW
+                              or len(cells) == len(names) and not cells[names.index(_YAW)]):
+            raise PathFileError(file, f'no yaw, but the header (line {header_line}) names a '
+                                f'yaw column: {_ALL_OR_NONE}', number, _YAW)
         if len(cells) != len(names):
+            hint = ''
+            if _YAW not in names and len(cells) == len(names) + 1:
+                hint = f' (a yaw needs a yaw column in the header: {_ALL_OR_NONE})'
             raise PathFileError(file, f'{len(cells)} fields, but the header (line '
-                                f"{header_line}) names {len(names)}: {','.join(names)}",
-                                number)
+                                f"{header_line}) names {len(names)}: {','.join(names)}"
+                                + hint, number)
         rows.append([_number(file, number, name, cell) for name, cell in zip(names, cells)])
         lines.append(number)
     if names is None:
@@ -207,7 +256,7 @@ def _header(file, line: int, cells: list[str]) -> list[str]:
     if all(_is_number(cell) for cell in cells):
         raise PathFileError(file, f'no header: {_HEADER_HINT}, before the points', line)
     for name, cell in zip(names, cells):
-        if name not in _TIMED:
+        if name not in _COLUMNS:
             raise PathFileError(file, f'unknown column {cell!r}: {_HEADER_HINT}', line)
         if names.count(name) > 1:
             raise PathFileError(file, f'column {name} is named twice', line)
@@ -246,20 +295,48 @@ def _yaml_rows(file, text: str):
     names = None
     for item in node.value:
         line = item.start_mark.line + 1
-        if not isinstance(item, yaml.SequenceNode) or len(item.value) not in (2, 3):
-            raise PathFileError(file, 'a point is a list [x, y] or [t, x, y]', line)
+        if isinstance(item, yaml.MappingNode):
+            fields = _yaml_fields(file, item)
+        elif isinstance(item, yaml.SequenceNode) and len(item.value) in (2, 3):
+            fields = dict(zip(_UNTIMED if len(item.value) == 2 else _TIMED, item.value))
+        else:
+            raise PathFileError(file, _POINT_HINT, line)
         if names is None:
-            names = _UNTIMED if len(item.value) == 2 else _TIMED
+            names = [name for name in _COLUMNS if name in fields]
             first_line = line
-        elif len(item.value) != len(names):
-            raise PathFileError(file, f'{len(item.value)} numbers, but the first point (line '
-                                f'{first_line}) has {len(names)}: [{", ".join(names)}]', line)
-        row = []
-        for name, scalar in zip(names, item.value):
-            row.append(_yaml_number(file, constructor, name, scalar))
-        rows.append(row)
+        elif (_YAW in fields) != (_YAW in names):
+            what = ('no yaw, but the first point (line {}) has one' if _YAW in names else
+                    'a yaw, but the first point (line {}) has none').format(first_line)
+            raise PathFileError(file, f'{what}: {_ALL_OR_NONE}', line, _YAW)
+        elif set(fields) != set(names):
+            if isinstance(item, yaml.SequenceNode):
+                what = (f'{len(fields)} numbers, but the first point (line {first_line}) has '
+                        f'{len(names)}: [{", ".join(names)}]')
+            else:
+                what = (f'keys {", ".join(fields)}, but the first point (line {first_line}) '
+                        f'has {", ".join(names)}')
+            raise PathFileError(file, what, line)
+        rows.append([_yaml_number(file, constructor, name, fields[name]) for name in names])
         lines.append(line)
     return rows, lines, list(names)
+
+
+def _yaml_fields(file, item) -> dict:
+    """Return the values of a YAML point given as a mapping, by their keys, checked."""
+    fields = {}
+    for key, value in item.value:
+        name = key.value if isinstance(key, yaml.ScalarNode) else None
+        line = key.start_mark.line + 1
+        if name not in _COLUMNS:
+            raise PathFileError(file, f'unknown key {name!r}: {_POINT_HINT}', line)
+        if name in fields:
+            raise PathFileError(file, f'key {name} given twice', line, name)
+        fields[name] = value
+    for name in _UNTIMED:
+        if name not in fields:
+            raise PathFileError(file, f'no key {name}: {_POINT_HINT}',
+                                item.start_mark.line + 1)
+    return fields
 
 
 def _points_entry(file, node):

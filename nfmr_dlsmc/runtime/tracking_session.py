@@ -10,7 +10,13 @@ odometry and runs on the control clock; it keeps running while the robot is stop
 (:class:`~nfmr_dlsmc.core.pose_estimator.PoseEstimator`: odometry fused at its stamps, the
 commands since predicted), otherwise the latest odometry. With ``fusion.enabled`` that
 odometry is the wheel odometry placed in the map by localisation fixes
-(:meth:`TrackingSession.on_wheel_odometry`, :meth:`TrackingSession.on_fix`; D33).
+(:meth:`TrackingSession.on_wheel_odometry`, :meth:`TrackingSession.on_fix`; D33). With
+``motion: free_icr`` (D36) the law is the free-ICR DLSMC: the pose is the chassis centre's,
+the heading follows its own reference (a path's heading column or ``heading.rule``:
+:func:`~nfmr_dlsmc.core.heading_reference.heading_reference`), and the body-frame twist
+(v_x, v_y, omega) goes to the wheels through
+:func:`~nfmr_dlsmc.core.swerve_kinematics.swerve_commands`, chosen for the steer angles
+measured last (:meth:`TrackingSession.on_steer_angles`; the commanded ones until any).
 """
 
 from dataclasses import dataclass, replace
@@ -20,9 +26,12 @@ from typing import NamedTuple
 from nfmr_dlsmc.core.arrival import ARRIVAL_OUTCOMES, check_goal_reach, with_arrival
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.fix_fusion import FixFusion, FixVerdict
+from nfmr_dlsmc.core.free_icr import FreeIcrController, motion_controller
+from nfmr_dlsmc.core.heading_reference import heading_reference
 from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
 from nfmr_dlsmc.core.steering import wheel_commands
+from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
@@ -41,12 +50,12 @@ class StateRow(NamedTuple):
     """
 
     t: float  #: trajectory time [s]
-    x: float  #: pose of P the law saw [m]
+    x: float  #: pose of P (free_icr: the centre) the law saw [m]
     y: float  #: [m]
     theta: float  #: [rad]
     x_d: float  #: reference [m]
     y_d: float  #: [m]
-    theta_r: float  #: reference heading [rad]
+    theta_r: float  #: reference heading [rad] (free_icr: psi_d)
     x_e: float  #: position errors in the world frame [m]
     y_e: float  #: [m]
     theta_d: float  #: heading the outer loop asks for [rad]
@@ -55,7 +64,7 @@ class StateRow(NamedTuple):
     s_y: float  #: [m]
     eta_hat: float  #: inner adaptive gain
     inner_phase: float  #: inner loop's phase (0 integral, 1 barrier)
-    v: float  #: speed command [m/s]
+    v: float  #: speed command [m/s] (free_icr: v_x, along the heading)
     omega: float  #: yaw-rate command [rad/s]
     v_raw: float  #: before saturation [m/s]
     omega_raw: float  #: [rad/s]
@@ -69,6 +78,7 @@ class StateRow(NamedTuple):
     steer_rr: float
     control_time: float  #: the tick's control clock [s]
     arrival: float  #: arrival outcome (a key of ARRIVAL_OUTCOMES; 0 while tracking)
+    v_y: float = 0.0  #: sideways speed command [m/s] (free_icr; 0 for the unicycle)
 
 
 #: Field names of :class:`StateRow`, in order (the ``controller_state`` layout).
@@ -86,7 +96,8 @@ class TickOutput:
     Attributes
     ----------
     v, omega : float
-        Unicycle command at P [m/s], [rad/s].
+        Unicycle command at P [m/s], [rad/s] (free_icr: v_x of the centre, along the
+        heading).
     steer : ndarray (4,)
         Steer angles [rad], FL FR RL RR.
     wheel_speed : ndarray (4,)
@@ -107,10 +118,16 @@ class TickOutput:
     state: StateRow
     stopped: bool
     report: str | None
+    v_y: float = 0.0  #: sideways speed [m/s] of the centre (free_icr)
 
 
 def _law_state(law) -> dict:
     """Return the DLSMC's inner signals of :class:`StateRow`; NaN for another law."""
+    if isinstance(law, FreeIcrController):  # the heading loop's, theta -> psi
+        return dict(zip(_LAW_FIELDS, (
+            law.x_e, law.y_e, law.psi_d, law.s_psi, law.outer.s_x, law.outer.s_y,
+            law.inner.eta_hat, float(law.inner.phase), law.speed_raw, law.omega_raw,
+            float(law.speed_saturated), float(law.omega_saturated))))
     if not isinstance(law, DlsmcController):
         return dict.fromkeys(_LAW_FIELDS, math.nan)
     return dict(zip(_LAW_FIELDS, (
@@ -149,9 +166,10 @@ class TrackingSession:
         from the robot is refused.
     law : object, optional
         The tracking law, with the interface of
-        :class:`~nfmr_dlsmc.core.dlsmc.DlsmcController` (``reset``, ``step``); the DLSMC of
-        ``params.dlsmc`` by default. The state row holds the DLSMC's inner signals, NaN for
-        another law.
+        :class:`~nfmr_dlsmc.core.dlsmc.DlsmcController` (``reset``, ``step``), or of
+        :class:`~nfmr_dlsmc.core.free_icr.FreeIcrController` with ``motion: free_icr``; the
+        DLSMC of ``params.dlsmc`` in the mode of ``params.motion`` by default. The state
+        row holds the DLSMC's inner signals, NaN for another law.
 
     """
 
@@ -162,7 +180,8 @@ class TrackingSession:
         self.gate = OdometryGate(OdometryRules(odom_timeout, odom_frame, max_jump,
                                                restart_threshold, confirm_messages))
         self.max_start_distance = max_start_distance
-        self.law = DlsmcController(params.dlsmc) if law is None else law
+        self.law = motion_controller(params.motion, params.dlsmc) if law is None else law
+        self._free_icr = params.motion == 'free_icr'
         # A path: the law inside the rule that stops at its end (core/arrival.py).
         self.controller = with_arrival(self.law, params.trajectory, params.arrival)
         self._outcome = 0.0  # the arrival outcome last reported
@@ -176,6 +195,10 @@ class TrackingSession:
         self._t = 0.0  # trajectory time [s] of the last tick that tracked
         self._tracked_last = False  # whether the previous tick tracked (for the step length)
         self._steer = np.zeros(4)
+        self._measured_steer = None  # steer angles [rad] measured last (free_icr)
+        self._aligning = False  # the wheel mapping's stop-align-drive state (free_icr)
+        self._wanted = None  # the steer angles [rad] the mapping wanted last (free_icr)
+        self._psi_d = math.nan  # the heading reference [rad] of the last tick (free_icr)
         self._v = 0.0  # speed [m/s] last commanded
         self._reported = None  # the fault kind last reported (None: tracking)
         self._restart_pending = False  # a restart happened, not reported yet
@@ -363,9 +386,22 @@ class TrackingSession:
         if last is not None and stamp <= last - self.gate.rules.restart_threshold:
             self._wheels.reset()  # the encoders' clock started over
         refused = self._wheels.update(stamp, *sample)
+        self.on_steer_angles(sample[0])
         if refused is None:
             self.on_wheel_odometry(*self._wheels.pose, wall_time, control_time, stamp)
         return refused
+
+    def on_steer_angles(self, angles) -> None:
+        """
+        Take the steer angles measured now [rad], FL FR RL RR (``motion: free_icr``).
+
+        The wheel mapping then chooses each set point for where the wheel is, not where it
+        was told to be (:func:`~nfmr_dlsmc.core.swerve_kinematics.swerve_commands`, eqs 2-4).
+        Ignored when not four finite angles.
+        """
+        angles = [float(a) for a in angles]
+        if len(angles) == 4 and all(math.isfinite(a) for a in angles):
+            self._measured_steer = angles
 
     def on_fix(self, x: float, y: float, theta: float, wall_time: float,
                control_time: float, stamp: float, frame_id: str | None = None,
@@ -395,6 +431,7 @@ class TrackingSession:
         self._new_origin = False
         self._t = 0.0
         self._tracked_last = False
+        self._aligning = False
         self._restart_pending = True
         self.restarts += 1
 
@@ -473,11 +510,68 @@ class TrackingSession:
                 self.estimator.reset()
         report = self._report(fault)
         step = self._step_length(t, not fault)
-        v, omega, steer, wheels, limited = self._command(fault, pose, reference, step)
+        if self._free_icr:
+            v, v_y, omega, steer, wheels = self._twist_command(fault, t, pose, reference, step)
+            limited = False
+        else:
+            v_y = 0.0
+            v, omega, steer, wheels, limited = self._command(fault, pose, reference, step)
         arrived = self._arrival_report(t)
         state = self._state_row(t, pose, reference, v, omega, steer, limited, fault,
-                                control_time)
-        return TickOutput(v, omega, steer, wheels, state, bool(fault), report or arrived)
+                                control_time, v_y)
+        return TickOutput(v, omega, steer, wheels, state, bool(fault), report or arrived, v_y)
+
+    def _twist_command(self, fault, t: float, pose: tuple, reference: tuple,
+                       step: float | None) -> tuple:
+        """
+        Return (v_x, v_y, omega, steer, wheel speeds) of a free-ICR tick.
+
+        Stopped by ``fault``: zero speed, the steering held; else the free-ICR law's step
+        towards the heading reference at trajectory time ``t`` [s], mapped to the wheels for
+        their measured angles. The estimator learns the twist.
+        """
+        psi_d, psidot_d = heading_reference(self.params.trajectory, self.params.heading, t)
+        self._psi_d = psi_d
+        if fault:
+            v_x = v_y = omega = 0.0
+            steer, wheels = self._steer.copy(), np.zeros(4)
+        else:
+            v_x, v_y, omega = self.controller.step(*pose, *reference[:4], psi_d, psidot_d,
+                                                   step)
+            current = self._steer if self._measured_steer is None else self._measured_steer
+            cmd = swerve_commands(v_x, v_y, omega, current, self.params.geometry,
+                                  self.params.swerve, self._aligning)
+            wheels, self._aligning = cmd.wheel_speed, cmd.aligning
+            steer = self._servo_set_points(cmd.steer, step)
+        self._v = math.hypot(v_x, v_y)
+        if self.estimator is not None:
+            self.estimator.command(v_x, omega, v_y)
+        return v_x, v_y, omega, steer, wheels
+
+    def _servo_set_points(self, wanted: np.ndarray, step: float | None) -> np.ndarray:
+        """
+        Return the steer set points for the angles ``wanted`` [rad]: led, then slewed.
+
+        With a declared ``steer_lag`` tau the set point leads the wanted angle by its rate,
+        delta + tau (delta - delta_prev) / dt, so that a first-order servo's angle follows
+        delta itself; not across a change larger than ``swerve.align_tolerance`` in one
+        tick (a wheel reversing or unwinding). Then it moves by at most ``swerve.steer_rate``
+        dt from the last set point, so that no set point jumps by more than the servo turns
+        in a tick (a reversal is a ramp the drive waits for: the stop-align-drive). Within
+        ``swerve.steer_limit``.
+        """
+        dt = self.params.dlsmc.dt if step is None else step
+        swerve, lag = self.params.swerve, self.params.dlsmc.steer_lag
+        previous = self._wanted
+        self._wanted = wanted
+        if lag > 0.0 and previous is not None:
+            change = wanted - previous
+            wanted = np.where(np.abs(change) <= swerve.align_tolerance,
+                              wanted + (lag / dt) * change, wanted)
+        reach = swerve.steer_rate * dt  # [rad]
+        steer = np.clip(wanted, self._steer - reach, self._steer + reach)
+        self._steer = np.clip(steer, -swerve.steer_limit, swerve.steer_limit)
+        return self._steer
 
     def _command(self, fault, pose: tuple, reference: tuple, step: float | None) -> tuple:
         """
@@ -501,16 +595,21 @@ class TrackingSession:
         return v, omega, steer, wheels, limited
 
     def _state_row(self, t: float, pose: tuple, reference: tuple, v: float, omega: float,
-                   steer: np.ndarray, limited: bool, fault, control_time: float) -> StateRow:
+                   steer: np.ndarray, limited: bool, fault, control_time: float,
+                   v_y: float) -> StateRow:
         """Return the tick's :class:`StateRow`."""
         trajectory = self.params.trajectory
         # A path has a heading also where it rests (its start and its goal).
-        theta_r = (float(trajectory.heading(t)) if isinstance(trajectory, PathTrajectory)
-                   else float(reference_heading(reference[2], reference[3])))
+        if self._free_icr:
+            theta_r = self._psi_d
+        elif isinstance(trajectory, PathTrajectory):
+            theta_r = float(trajectory.heading(t))
+        else:
+            theta_r = float(reference_heading(reference[2], reference[3]))
         fl, fr, rl, rr = steer.tolist()
         return StateRow(
             t=t, x=pose[0], y=pose[1], theta=pose[2], x_d=reference[0], y_d=reference[1],
             theta_r=theta_r, v=v, omega=omega, steer_limited=float(limited),
             stopped=float(bool(fault)), steer_fl=fl, steer_fr=fr, steer_rl=rl, steer_rr=rr,
             control_time=float(control_time), arrival=getattr(self.controller, 'outcome', 0.0),
-            **_law_state(self.law))
+            v_y=v_y, **_law_state(self.law))
