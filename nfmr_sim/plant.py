@@ -35,10 +35,6 @@ from nfmr_sim.world import ChassisWorld
 from nfmr_sim.world_config import WorldConfig
 import numpy as np
 
-#: The steer mode whose tracked point P is the chassis centre (crab, j1 = -1): the point the
-#: free-ICR law tracks (D36).
-CENTRE = SteerMode(j1=-1.0, j2=2.0)
-
 
 def simulate_pybullet(session: TrackingSession, x0, duration: float,
                       world_config: WorldConfig | None = None,
@@ -88,7 +84,9 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
         truth), e.g. to compute wheel odometry from the encoders.
     encoders : EncoderConfig, optional
         The encoders' rate and resolution (default: exact, with the sim node's auxiliary
-        topics); read only with ``session.fusion``.
+        topics); read with ``session.fusion`` (the wheel odometry) and in the free-ICR mode
+        (the steer angles, :meth:`TrackingSession.on_steer_joint_states`), as the nodes
+        pass them.
 
     Returns
     -------
@@ -103,8 +101,7 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
     geometry, steering = params.geometry, params.steering
     world_config = WorldConfig() if world_config is None else world_config
     free_icr = params.motion == 'free_icr'
-    # The free-ICR law tracks the centre: the world's P is the centre (its crab mode's).
-    world_config = replace(world_config, steer_mode=CENTRE if free_icr else steering)
+    world_config = replace(world_config, steer_mode=steering)
     dt = world_config.physics_dt
     x0, n = check_start(session.controller, x0, duration, dt)
     chassis = world_config.chassis
@@ -119,7 +116,8 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
                              '(localization.rate > 0, e.g. the sensing preset field)')
     per_message = not fused and \
         lockstep_tick_source(noise.odom_rate, noise.odom_latency, dt) == 'odom'
-    wheels_in = _WheelInput(encoders, world_config, params.joints) if fused else None
+    wheels_in = (_WheelInput(encoders, world_config, params.joints, steer_only=not fused)
+                 if fused or free_icr else None)
     fix_covariance = np.diag([world_config.localization.position_noise ** 2] * 2
                              + [world_config.localization.yaw_noise ** 2])
     # What a message's covariance says: the variances of the world's odometry noise.
@@ -139,10 +137,9 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
             now = sent_time(out.time)
             odom = None if fused else out.odometry
             ticked = None
-            if free_icr:
-                session.on_steer_angles(out.joint_position[:4].tolist())
-            if fused:
+            if wheels_in is not None:
                 wheels_in.offer(session, k, out, now)
+            if fused:
                 fix = out.localization
                 if fix is not None:
                     session.on_fix(fix.x, fix.y, sent_yaw(fix.yaw), now, now,
@@ -197,14 +194,21 @@ def simulate_pybullet(session: TrackingSession, x0, duration: float,
 
 
 class _WheelInput:
-    """The encoders' readings as joint_states to a fusing session, at their period."""
+    """
+    The encoders' readings as joint_states to the session, at their period.
 
-    def __init__(self, config: EncoderConfig | None, world_config: WorldConfig, joints):
+    To a fusing session whole (its wheel odometry); with ``steer_only`` (a free-ICR session
+    that does not fuse) for the steer angles alone, as the controller node takes them.
+    """
+
+    def __init__(self, config: EncoderConfig | None, world_config: WorldConfig, joints,
+                 steer_only: bool = False):
         config = EncoderConfig() if config is None else config
         self._every = config.period_steps(world_config.physics_dt,
                                           SimSettings().aux_publish_every)
         self._encoders = Encoders(config)
         self._names = [*joints.steer, *joints.drive]  # the sim's joint order
+        self._steer_only = steer_only
 
     def offer(self, session: TrackingSession, k: int, out, now: float) -> None:
         """At every reading's step k, pass the joint states of ``out`` to ``session``."""
@@ -212,7 +216,10 @@ class _WheelInput:
             return
         position, velocity = self._encoders.read(out.time, out.joint_position,
                                                  out.joint_velocity)
-        session.on_joint_states(self._names, position, velocity, now, now, now)
+        if self._steer_only:
+            session.on_steer_joint_states(self._names, position, velocity)
+        else:
+            session.on_joint_states(self._names, position, velocity, now, now, now)
 
 
 def world_rtf(sim_seconds: float) -> dict:

@@ -52,6 +52,12 @@ def test_crab_steering_is_refused_only_for_the_unicycle():
     assert params(**{'steering.j1': -1.0}).steering.is_crab
 
 
+def test_free_icr_needs_the_odometry_of_the_centre():
+    # Front-only steering puts P on the rear axle: the free-ICR law tracks the centre.
+    with pytest.raises(ParameterError, match=r'steering.j1 = 0.0: must be 1 or -1 with motion'):
+        params(**{'steering.j1': 0.0})
+
+
 @pytest.mark.parametrize('flat, match', [
     ({'heading.rule': 'north'}, r"heading.rule = 'north'"),
     ({'heading.yaw': math.nan}, 'heading.yaw'),

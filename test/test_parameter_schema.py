@@ -111,8 +111,9 @@ def test_one_chassis_geometry_for_the_controller_and_the_sim():
         assert (chassis[name].unit, chassis[name].description, chassis[name].rule_text,
                 chassis[name].default) == (p.unit, p.description, p.rule_text, p.default)
     assert ChassisConfig().wheel_positions.tolist() == RobotGeometry().wheel_positions.tolist()
-    with pytest.raises(ParameterError, match=r'chassis\.steer_limit = 2\.0 rad: must be <= '):
-        ChassisConfig(steer_limit=2.0)
+    with pytest.raises(ParameterError, match=r'chassis\.steer_limit = 3\.2 rad: must be <= pi'):
+        ChassisConfig(steer_limit=3.2)
+    assert ChassisConfig(steer_limit=math.pi).steer_limit == math.pi  # a free-ICR range
 
 
 @pytest.mark.parametrize('cls', CONFIGS, ids=[c.__name__ for c in CONFIGS])

@@ -436,6 +436,33 @@ def test_a_field_run_fuses_the_encoders_with_the_fixes(tmp_path):
     assert float(line.split()[-1]) < 0.01
 
 
+def test_a_free_icr_run_docks_sideways_over_ros(tmp_path):
+    # config/robot_free_icr.yaml: the docking path over ROS lockstep. The controller takes
+    # the sim's steer angles from joint_states, cmd_vel carries linear.y, the reference
+    # path's poses face psi_d (+x), and the end table's figures are those of the mode
+    # (measured: p99 3.25 mm, 1.14 mm and 0.07 mrad from the goal at rest).
+    from geometry_msgs.msg import Twist
+    from nfmr_dlsmc.bag.reader import read_bag
+
+    proc = start_run(tmp_path, 'config/robot_free_icr.yaml', '--no-compare')
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    run_dir = Path(stdout.strip().splitlines()[-1]).parent
+    contents = read_bag(run_dir / 'bag', topics=['/cmd_vel', '/reference_path'])
+    twists = [deserialize_message(m.data, Twist) for m in contents.of('/cmd_vel')]
+    assert max(t.linear.y for t in twists) > 0.25  # it slid into the slot
+    assert max(abs(t.angular.z) for t in twists) < 0.01  # facing +x all along
+    path = deserialize_message(contents.of('/reference_path')[-1].data, PathMessage)
+    assert {round(p.pose.orientation.z, 9) for p in path.poses} == {0.0}
+    table = {line.rsplit(None, 1)[0].strip(): line.split()[-1]
+             for line in stdout.splitlines() if 'e' in line.split()[-1] or '.' in line}
+    assert table['end of the path'] == 'arrived'
+    assert float(table['hold: distance p99 [m]']) < 0.0045
+    assert float(table['distance to the goal at rest [m]']) < 0.002
+    assert float(table['|heading error| at the goal at rest [rad]']) < 0.001
+    assert 'not used' not in (run_dir / 'controller.log').read_text()
+
+
 def test_the_end_says_how_the_run_kept_its_timing(short_run):
     # In lockstep the loop's periods are on simulated time: 1 kHz exactly, no overrun.
     code, stdout, _ = short_run

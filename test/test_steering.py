@@ -124,7 +124,8 @@ def test_invalid_steer_modes(kwargs, name):
 @pytest.mark.parametrize('kwargs, name', [
     ({'wheelbase': 0.0}, 'geometry.wheelbase'), ({'track': -1.0}, 'geometry.track'),
     ({'wheel_radius': math.inf}, 'geometry.wheel_radius'),
-    ({'steer_limit': 2.0}, 'geometry.steer_limit')])
+    ({'steer_limit': 3.2}, 'geometry.steer_limit'),
+    ({'steer_limit': 0.0}, 'geometry.steer_limit')])
 def test_invalid_geometry(kwargs, name):
     with pytest.raises(ParameterError) as info:
         RobotGeometry(**kwargs)

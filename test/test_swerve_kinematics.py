@@ -243,6 +243,15 @@ def test_a_wheel_within_the_least_speed_of_the_icr_stands(offset, stands):
         assert speeds[0] == pytest.approx(-offset / 0.5 * math.cos(HALF - 0.4), rel=1e-6)
 
 
+def test_a_standing_wheel_keeps_the_angle_it_is_given_to_hold():
+    angles, speeds, _ = run((0.0, 0.0, 0.0), current=[0.3, -0.2, 2.9, -3.1], config=NARROW)
+    assert angles == [0.3, -0.2, HALF, -HALF] and speeds == [0.0] * 4  # the current, clipped
+    out = swerve_commands(0.0, 0.0, 0.0, [0.3, -0.2, 0.1, 0.0], GEOM, NARROW,
+                          hold_steer=[0.25, -0.25, 2.0, 0.0])
+    assert out.steer.tolist() == [0.25, -0.25, HALF, 0.0]  # the set points held, clipped
+    assert not out.wheel_speed.any()
+
+
 def test_a_wheel_at_the_least_speed_drives():
     angles, speeds, _ = run((WIDE.min_wheel_speed, 0.0, 0.0), current=[0.2] * 4)
     assert angles == [0.0] * 4

@@ -35,9 +35,12 @@ CASES = [
      'cannot read parameter file {d}/missing.yaml'),
     ('nfmr-run', lambda d: [str(d / 'missing.yaml'), '--out', str(d / 'runs')],
      'cannot read parameter file {d}/missing.yaml'),
-    ('nfmr-run', lambda d: [str(Path(__file__).parents[1] / 'config' / 'robot_free_icr.yaml'),
+    ('nfmr-run', lambda d: [str(_write(d / 'f.yaml', 'controller:\n  ros__parameters:\n'
+                                                     '    motion: free_icr\n'
+                                                     '/**:\n  ros__parameters:\n'
+                                                     '    steering: {j1: 0.0, j2: 1.0}\n')),
                             '--out', str(d / 'runs')],
-     "motion = 'free_icr': must be nonholonomic in nfmr-run"),
+     'steering.j1 = 0.0: must be 1 or -1 with motion free_icr'),
     ('nfmr-analyze', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
     ('nfmr-replay', lambda d: [str(d / 'nobag')], '{d}/nobag: no such file or directory'),
     ('nfmr-reindex', lambda d: [str(_write(d / 'x.mcap', 'not a bag'))], 'not an MCAP file'),

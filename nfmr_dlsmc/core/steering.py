@@ -56,9 +56,11 @@ class RobotGeometry:
     wheel_radius: float = param(0.14, 'm', 'tyre radius (Table 1 wheel diameter 0.28 m)',
                                 POSITIVE, read_only=True)
     steer_limit: float = param(math.pi / 2, 'rad', 'largest |steer angle| of a steer joint '
-                               '(the sim rejects steer commands beyond it)',
-                               positive_up_to(math.pi / 2, 'pi/2', inclusive=True,
-                                              why=' (a wheel reverses beyond that)'),
+                               '(the sim rejects steer commands beyond it); the unicycle '
+                               'mapping folds into +-pi/2 whatever the range, the free-ICR '
+                               'one (swerve.steer_limit) may use up to this',
+                               positive_up_to(math.pi, 'pi', inclusive=True,
+                                              why=' (beyond, a joint winds up)'),
                                read_only=True)
 
     def __post_init__(self):

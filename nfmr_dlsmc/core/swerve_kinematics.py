@@ -46,7 +46,9 @@ still turning pushes only along its present heading and never against the motion
 (delta_i the set point: at the end of the range when the margin holds it there.)
 
 A wheel slower than s_min (``min_wheel_speed``) keeps its angle and stands: delta_i = c'_i,
-w_i = 0. This covers the zero twist and an ICR on a wheel or within s_min / |omega| of it,
+w_i = 0 (or, given ``hold_steer`` h, delta_i = h_i clipped into the range: the set point
+it had, so that a standing wheel's set point does not follow its own measured angle as the
+joint gives way). This covers the zero twist and an ICR on a wheel or within s_min / |omega| of it,
 where phi_i is undefined or swings through pi as the ICR passes: no division, no NaN.
 
 Stop-align-drive: with Delta = max_i |delta_i - c_i| the largest steer change needed and
@@ -146,7 +148,8 @@ def _finite(name: str, value) -> float:
 
 
 def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry: RobotGeometry,
-                    config: SwerveConfig, aligning: bool = False) -> SwerveCommands:
+                    config: SwerveConfig, aligning: bool = False,
+                    hold_steer=None) -> SwerveCommands:
     """
     Return the wheel set points for the centre's twist, chosen for the wheels' angles now.
 
@@ -168,6 +171,9 @@ def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry:
         The steer range, the servo's rate, the alignment and the least wheel speed.
     aligning : bool
         The stop-align-drive state the last call returned (False at the start).
+    hold_steer : array-like (4,), optional
+        The angles [rad] standing wheels keep, e.g. the last set points; default the
+        current angles.
 
     Raises
     ------
@@ -182,12 +188,13 @@ def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry:
     for name, angle in zip(('FL', 'FR', 'RL', 'RR'), current):
         _finite(f'current_steer {name}', angle)
     limit = config.steer_limit
+    hold = current if hold_steer is None else [float(h) for h in hold_steer]
     steer, speed = [], []
-    for (x, y), c in zip(geometry.wheel_positions.tolist(), current):
+    for (x, y), c, h in zip(geometry.wheel_positions.tolist(), current, hold):
         ux, uy = vx - omega * y, vy + omega * x  # eq. (1) [m/s]
         wheel_speed, held = math.hypot(ux, uy), min(max(c, -limit), limit)  # [m/s], [rad]
         if wheel_speed < config.min_wheel_speed:
-            steer.append(held)
+            steer.append(min(max(h, -limit), limit))
             speed.append(0.0)
             continue
         phi = math.atan2(uy, ux)

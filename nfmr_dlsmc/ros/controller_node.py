@@ -330,6 +330,11 @@ class ControllerNode(SchemaLifecycleNode):
                                                      self._on_wheel_odom, COMMAND_QOS))
                 self._odom_subs = [wheels, self._inputs.create_subscription(
                     PoseWithCovarianceStamped, 'localization', self._on_fix, FIX_QOS)]
+            if self.session.params.motion == 'free_icr' and self.session.fusion is None:
+                # The steer angles the wheel mapping chooses from (D37).
+                self._joint_refusals = set()
+                self._odom_subs.append(self._inputs.create_subscription(
+                    JointState, 'joint_states', self._on_steer_states, COMMAND_QOS))
             self._path_sub = self.create_subscription(Path, 'reference_path_in',
                                                       self._on_path, PATH_IN_QOS)
             if values['tick_source'] == 'sim_clock':
@@ -461,9 +466,22 @@ class ControllerNode(SchemaLifecycleNode):
                 return
             refused = self.session.on_joint_states(msg.name, msg.position, msg.velocity,
                                                    wall, control, stamp)
+        self._log_joint_refusal(refused, msg)
+
+    def _on_steer_states(self, msg: JointState) -> None:
+        """Take the measured steer angles (free ICR, D37); a message it cannot use, logged once."""
+        with self._lock:
+            if not self._active:
+                return
+            refused = self.session.on_steer_joint_states(msg.name, msg.position, msg.velocity)
+        self._log_joint_refusal(refused, msg)
+
+    def _log_joint_refusal(self, refused: str | None, msg: JointState) -> None:
+        """Log a joint_states message not used, once per kind of reason."""
         kind = None if refused is None else re.sub(r'[-+0-9.e]+', '#', refused)
         if kind is not None and kind not in self._joint_refusals:
             self._joint_refusals.add(kind)
+            stamp = stamp_seconds(msg.header.stamp.sec, msg.header.stamp.nanosec)
             self.get_logger().warning(f'joint_states stamped {stamp:.3f} s not used: '
                                       f'{refused}; further ones like it not logged')
 
@@ -636,8 +654,8 @@ class ControllerNode(SchemaLifecycleNode):
         lockstep = self._values['tick_source'] != 'clock'
         self._stats.record(control_time if lockstep else start, time.monotonic() - start)
 
-    def _twist(self, v: float, omega: float):
-        """Return the ``cmd_vel`` message of (v [m/s], omega [rad/s])."""
+    def _twist(self, v: float, omega: float, v_y: float = 0.0):
+        """Return the ``cmd_vel`` message of (v [m/s], omega [rad/s]; free ICR v_y [m/s])."""
         if self._values['twist_stamped']:
             msg = TwistStamped()
             msg.header.stamp = self._control_clock.now().to_msg()
@@ -646,13 +664,14 @@ class ControllerNode(SchemaLifecycleNode):
         else:
             msg = twist = Twist()
         twist.linear.x = v
+        twist.linear.y = v_y
         twist.angular.z = omega
         return msg
 
     def _publish(self, out) -> None:
         self._steer_pub.publish(Float64MultiArray(data=out.steer.tolist()))
         self._wheel_pub.publish(Float64MultiArray(data=out.wheel_speed.tolist()))
-        self._twist_pub.publish(self._twist(out.v, out.omega))
+        self._twist_pub.publish(self._twist(out.v, out.omega, out.v_y))
         state = Float64MultiArray(data=list(out.state))
         state.layout.dim = self._state_layout
         self._state_pub.publish(state)
@@ -671,9 +690,11 @@ class ControllerNode(SchemaLifecycleNode):
         """Publish ``trajectory`` (the session's when None) on ``reference_path``."""
         horizon = self._values['path_horizon']
         step = max(PATH_STEP, horizon / (MAX_PATH_POSES - 1))
+        params = self.session.params
         self._path_pub.publish(reference_path(
-            self.session.params.trajectory if trajectory is None else trajectory, horizon,
-            step, self.get_clock().now().to_msg(), self._values['odom_frame']))
+            params.trajectory if trajectory is None else trajectory, horizon, step,
+            self.get_clock().now().to_msg(), self._values['odom_frame'],
+            params.heading if params.motion == 'free_icr' else None))
 
     def _publish_markers(self) -> None:
         reference = self._reference

@@ -202,11 +202,6 @@ def run(options: RunOptions) -> int:
                              "joint_states in nfmr-run: the controller takes the sim's "
                              'encoders itself, in lockstep (a wheel odometry node of its '
                              'own would run behind the steps)')
-    if params.motion != 'nonholonomic':
-        raise ParameterError('motion', params.motion, 'must be nonholonomic in nfmr-run: over '
-                             'ROS the free-ICR mode is not wired yet (cmd_vel without '
-                             'linear.y, the sim tracking P); run it in process: nfmr-eval '
-                             '--plant pybullet --params FILE')
     reservation = reserve_domain(options.domain)
     try:
         return _run(options, config, params, settings, reservation)

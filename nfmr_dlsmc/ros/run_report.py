@@ -25,7 +25,8 @@ from nfmr_dlsmc.analysis.run_metrics import (
 )
 from nfmr_dlsmc.analysis.run_plots import plot_runs
 from nfmr_dlsmc.bag.reader import read_bag
-from nfmr_dlsmc.core.dlsmc import DlsmcController
+from nfmr_dlsmc.core.free_icr import motion_controller
+from nfmr_dlsmc.core.heading_reference import heading_reference
 from nfmr_dlsmc.core.metrics import simulation_metrics
 from nfmr_dlsmc.ros.bag_animation import animate_bag
 from nfmr_dlsmc.ros.run_series import (
@@ -81,6 +82,8 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
         print(f'nfmr-run: warning: {note}', file=sys.stderr)
     goal = getattr(params.trajectory, 'end_pose', None)
     path_end = None if goal is None else params.trajectory.duration
+    if goal is not None and params.motion == 'free_icr':  # the heading's own at the end
+        goal = (*goal[:2], heading_reference(params.trajectory, params.heading, path_end)[0])
     columns = [('ROS pybullet', state_metrics(series, options.hold_from,
                                               steer_joint_rates(contents), goal, path_end))]
     runs = [('ROS pybullet', series)]
@@ -88,12 +91,14 @@ def report_run(bag_dir: Path, run_dir: Path, params: ControllerParams, settings,
         print('the same scenario in this process: pybullet, then the kinematic model ...',
               file=sys.stderr, flush=True)
         for label, plant in (('in-process pybullet', 'pybullet'), ('kinematic', 'kinematic')):
-            sim = plant_run(plant, DlsmcController(params.dlsmc), params, params.trajectory,
-                            settings.initial_pose, options.duration, settings.world)
+            sim = plant_run(plant, motion_controller(params.motion, params.dlsmc), params,
+                            params.trajectory, settings.initial_pose, options.duration,
+                            settings.world)
             columns.append((label, simulation_metrics(sim, options.hold_from, goal, path_end)))
             plotted = {'t': sim.t, 'x': sim.state[:, 0], 'y': sim.state[:, 1],
                        'x_d': sim.reference[:, 0], 'y_d': sim.reference[:, 1],
-                       'theta_e': sim.telemetry['theta_e'], 'v': sim.v, 'omega': sim.omega}
+                       'theta_e': sim.telemetry.get('theta_e', sim.telemetry.get('psi_e')),
+                       'v': sim.v, 'omega': sim.omega}
             if sim.steer is not None:
                 plotted.update(zip(STEER_FIELDS, sim.steer.T))
             runs.append((label, plotted))

@@ -15,6 +15,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 from nfmr_dlsmc.core.footprint import chassis_corners, Footprint, wheel_centres
+from nfmr_dlsmc.core.heading_reference import heading_reference
 from nfmr_dlsmc.core.path_reference import PathTrajectory
 from nfmr_dlsmc.core.steering import RobotGeometry
 from nfmr_dlsmc.core.trajectories import reference_heading
@@ -45,7 +46,7 @@ def _marker(stamp: Time, frame_id: str, namespace: str, marker_id: int, marker_t
 
 
 def reference_path(trajectory, duration_s: float, step_s: float, stamp: Time,
-                   frame_id: str = 'odom') -> Path:
+                   frame_id: str = 'odom', heading=None) -> Path:
     """
     Return the whole reference path, sampled from t = 0 to ``duration_s`` inclusive.
 
@@ -62,11 +63,16 @@ def reference_path(trajectory, duration_s: float, step_s: float, stamp: Time,
         Stamp of the path and of every pose.
     frame_id : str
         Frame of the poses.
+    heading : HeadingConfig, optional
+        The free-ICR mode's heading rule (D37): the poses are then oriented along the
+        heading reference psi_d
+        (:func:`~nfmr_dlsmc.core.heading_reference.heading_reference`).
 
     Returns
     -------
     nav_msgs.msg.Path
-        Poses at (x_d, y_d, 0), each oriented along the path tangent theta_r (eq. 7).
+        Poses at (x_d, y_d, 0), each oriented along the path tangent theta_r (eq. 7), or
+        psi_d with ``heading``.
 
     """
     duration = check_positive('duration_s', duration_s, 's')
@@ -75,8 +81,12 @@ def reference_path(trajectory, duration_s: float, step_s: float, stamp: Time,
     t = np.minimum(step * np.arange(count + 1), duration)
     x_d, y_d, xdot_d, ydot_d = trajectory.sample(t)
     # A path has a heading also where it rests (its start and its goal).
-    theta_r = (trajectory.heading(t) if isinstance(trajectory, PathTrajectory)
-               else reference_heading(xdot_d, ydot_d))
+    if heading is not None:
+        theta_r = np.array([heading_reference(trajectory, heading, k)[0] for k in t.tolist()])
+    elif isinstance(trajectory, PathTrajectory):
+        theta_r = trajectory.heading(t)
+    else:
+        theta_r = reference_heading(xdot_d, ydot_d)
     path = Path(header=_header(stamp, frame_id))
     path.poses = [PoseStamped(header=_header(stamp, frame_id)) for _ in t]
     for pose, x, y, yaw in zip(path.poses, x_d.tolist(), y_d.tolist(), theta_r.tolist()):

@@ -417,6 +417,10 @@ def controller_params(flat: dict) -> ControllerParams:
         given['steering.j2'] = 1.0 - j1  # the only j2 SteerMode accepts
     mode = from_flat(SteerMode, given)
     motion = _MOTION.check(flat.get(_MOTION.name, _MOTION.default))
+    if motion == 'free_icr' and not mode.is_crab and mode.zero_slip_offset(1.0) != 0.0:
+        raise ParameterError('steering.j1', mode.j1, 'must be 1 or -1 with motion free_icr: '
+                             'the odometry then reports the chassis centre, the point the '
+                             'free-ICR law tracks (the steering mapping itself is swerve.*)')
     if mode.is_crab and motion == 'nonholonomic':
         raise ParameterError('steering.j1', mode.j1, 'must be > -1: the DLSMC steers by yawing, '
                              'which crab mode (j1 = -1) cannot')

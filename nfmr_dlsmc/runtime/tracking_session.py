@@ -403,6 +403,26 @@ class TrackingSession:
         if len(angles) == 4 and all(math.isfinite(a) for a in angles):
             self._measured_steer = angles
 
+    def on_steer_joint_states(self, names, positions, velocities) -> str | None:
+        """
+        Take the steer angles of one joint_states message (``motion: free_icr``).
+
+        The joints of ``params.joints``
+        (:func:`~nfmr_dlsmc.runtime.joint_states.wheel_sample`) to
+        :meth:`on_steer_angles`. With ``fusion`` on, :meth:`on_joint_states` does this too.
+
+        Returns
+        -------
+        str or None
+            Why the message was not used; None when it was.
+
+        """
+        sample = wheel_sample(names, positions, velocities, self.params.joints)
+        if isinstance(sample, str):
+            return sample
+        self.on_steer_angles(sample[0])
+        return None
+
     def on_fix(self, x: float, y: float, theta: float, wall_time: float,
                control_time: float, stamp: float, frame_id: str | None = None,
                covariance=None) -> FixVerdict:
@@ -540,25 +560,27 @@ class TrackingSession:
                                                    step)
             current = self._steer if self._measured_steer is None else self._measured_steer
             cmd = swerve_commands(v_x, v_y, omega, current, self.params.geometry,
-                                  self.params.swerve, self._aligning)
+                                  self.params.swerve, self._aligning, hold_steer=self._steer)
             wheels, self._aligning = cmd.wheel_speed, cmd.aligning
-            steer = self._servo_set_points(cmd.steer, step)
+            steer = self._servo_set_points(cmd.steer, cmd.wheel_speed != 0.0, step)
         self._v = math.hypot(v_x, v_y)
         if self.estimator is not None:
             self.estimator.command(v_x, omega, v_y)
         return v_x, v_y, omega, steer, wheels
 
-    def _servo_set_points(self, wanted: np.ndarray, step: float | None) -> np.ndarray:
+    def _servo_set_points(self, wanted: np.ndarray, driving: np.ndarray,
+                          step: float | None) -> np.ndarray:
         """
         Return the steer set points for the angles ``wanted`` [rad]: led, then slewed.
 
-        With a declared ``steer_lag`` tau the set point leads the wanted angle by its rate,
-        delta + tau (delta - delta_prev) / dt, so that a first-order servo's angle follows
-        delta itself; not across a change larger than ``swerve.align_tolerance`` in one
-        tick (a wheel reversing or unwinding). Then it moves by at most ``swerve.steer_rate``
-        dt from the last set point, so that no set point jumps by more than the servo turns
-        in a tick (a reversal is a ramp the drive waits for: the stop-align-drive). Within
-        ``swerve.steer_limit``.
+        With a declared ``steer_lag`` tau the set point of a wheel that drives
+        (``driving``) leads the wanted angle by its rate, delta + tau (delta - delta_prev) /
+        dt, so that a first-order servo's angle follows delta itself; not across a change
+        larger than ``swerve.align_tolerance`` in one tick (a wheel reversing or unwinding),
+        nor for a standing wheel, whose wanted angle is the set point it holds. Then it
+        moves by at most ``swerve.steer_rate`` dt from the last set point, so that no set
+        point jumps by more than the servo turns in a tick (a reversal is a ramp the drive
+        waits for: the stop-align-drive). Within ``swerve.steer_limit``.
         """
         dt = self.params.dlsmc.dt if step is None else step
         swerve, lag = self.params.swerve, self.params.dlsmc.steer_lag
@@ -566,7 +588,7 @@ class TrackingSession:
         self._wanted = wanted
         if lag > 0.0 and previous is not None:
             change = wanted - previous
-            wanted = np.where(np.abs(change) <= swerve.align_tolerance,
+            wanted = np.where(driving & (np.abs(change) <= swerve.align_tolerance),
                               wanted + (lag / dt) * change, wanted)
         reach = swerve.steer_rate * dt  # [rad]
         steer = np.clip(wanted, self._steer - reach, self._steer + reach)
