@@ -6,9 +6,10 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path as PathMessage
+from nfmr_dlsmc.core.path_reference import PathError
 from nfmr_dlsmc.core.steering import RobotGeometry, SteerMode, wheel_commands
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.ros.controller_node import ControllerNode, path_stamp
+from nfmr_dlsmc.ros.controller_node import ControllerNode, path_headings, path_stamp
 from nfmr_dlsmc.runtime.params import controller_parameters
 from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS as STATE_LABELS
 import numpy as np
@@ -648,3 +649,21 @@ def test_on_simulated_time_odometry_late_in_a_busy_executor_is_no_other_pace(set
         clock_until_seen(node, clock, 10.0 + k * 0.01)
     wait_for(lambda: len(peer.states) > 100, what='steps on simulated time')
     assert not any('odometry time runs at' in line for line in log.read())
+
+
+def test_a_received_path_s_orientations_are_its_headings_in_free_icr():
+    def path(quaternions):
+        msg = PathMessage()
+        for k, (z, w) in enumerate(quaternions):
+            pose = PoseStamped()
+            pose.pose.position.x = float(k)
+            pose.pose.orientation.z, pose.pose.orientation.w = z, w
+            msg.poses.append(pose)
+        return msg
+
+    half = math.sqrt(0.5)
+    assert path_headings(path([(0.0, 1.0), (half, half), (1.0, 0.0)])) == pytest.approx(
+        [0.0, math.pi / 2, math.pi])
+    assert path_headings(path([(0.0, 0.0)] * 3)) is None  # unset: the heading rule
+    with pytest.raises(PathError, match='pose 1 has no orientation'):
+        path_headings(path([(0.0, 1.0), (0.0, 0.0), (0.0, 1.0)]))

@@ -276,3 +276,15 @@ def test_the_set_points_move_no_faster_than_the_servo_and_lead_its_lag():
         a, b = _feed(led, (x_d, y_d, 0.0), t), _feed(plain, (x_d, y_d, 0.0), t)
     rate = trajectory.speed / trajectory.radius  # [rad/s] the direction's turn
     assert a.steer - b.steer == pytest.approx([0.05 * rate] * 4, rel=0.02)
+
+
+def test_a_path_received_with_headings_is_followed_with_them():
+    s = TrackingSession(params(), odom_timeout=0.1, max_start_distance=1.0)
+    _feed(s, (0.0, 0.0, 0.0), 0.0)
+    reference = s.path_reference([(0.0, 0.0), (0.0, 0.0), (1.0, 0.0)], yaw=[0.0, 1.0, 1.0])
+    assert reference.has_yaw and reference.yaw_reference(reference.duration)[0] == 1.0
+    s.replace_reference(reference)
+    states = [dict(zip(STATE_FIELDS, _feed(s, (0.0, 0.0, 0.0), 0.001 * k).state))
+              for k in range(1, 300)]
+    assert states[-1]['theta_r'] > 0.0  # turning on the spot towards 1 rad
+    assert states[-1]['x_d'] == 0.0  # while the position rests

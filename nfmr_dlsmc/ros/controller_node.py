@@ -149,6 +149,33 @@ def path_identity(msg: Path) -> tuple:
         for p in msg.poses))
 
 
+def path_headings(msg: Path) -> list | None:
+    """
+    Return the headings [rad] of a received path's poses, for the free-ICR mode (D37).
+
+    None when no pose has an orientation (every quaternion zero: the planner left them
+    unset; the heading rule applies).
+
+    Raises
+    ------
+    PathError
+        Some poses have an orientation and some not (a quaternion of norm zero), or one is
+        not finite: naming the first such pose.
+
+    """
+    quaternions = [(p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z,
+                    p.pose.orientation.w) for p in msg.poses]
+    norms = [math.hypot(*q) for q in quaternions]
+    if not any(norms):
+        return None
+    for k, norm in enumerate(norms):
+        if not (math.isfinite(norm) and norm > 0.0):
+            raise PathError(f'pose {k} has no orientation (quaternion {quaternions[k]}) while '
+                            'others have: a free-ICR path takes a heading from every pose '
+                            'or from none', k)
+    return [yaw_from_quaternion(*q) for q in quaternions]
+
+
 def path_answer(msg: Path, topic: str, problem: str | None, summary: str) -> DiagnosticStatus:
     """
     Return the answer on ``reference_path_status`` to the path ``msg`` received on ``topic``.
@@ -558,7 +585,8 @@ class ControllerNode(SchemaLifecycleNode):
                                 f'expected {frame!r} (the odometry frame)')
             reference = session.path_reference(stamped_points(
                 [(p.pose.position.x, p.pose.position.y) for p in msg.poses],
-                [p.header.stamp.sec + p.header.stamp.nanosec * 1e-9 for p in msg.poses]))
+                [p.header.stamp.sec + p.header.stamp.nanosec * 1e-9 for p in msg.poses]),
+                path_headings(msg) if session.params.motion == 'free_icr' else None)
         except PathError as exc:
             self._refuse_path(msg, topic, exc.rule)
             return

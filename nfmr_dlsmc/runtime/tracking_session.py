@@ -239,14 +239,14 @@ class TrackingSession:
         if max_start_distance is not None:
             self.max_start_distance = max_start_distance
 
-    def path_reference(self, points) -> PathTrajectory:
+    def path_reference(self, points, yaw=None) -> PathTrajectory:
         """
         Return the reference along ``points`` for the robot as it is now.
 
         Rounded and timed by ``params.path_profile``, starting from the speed last commanded
-        (at most the cruise speed); ``points`` as :meth:`PathTrajectory.from_points` takes
-        them. Building it takes milliseconds: do it outside the control loop, then
-        :meth:`replace_reference`.
+        (at most the cruise speed); ``points`` and ``yaw`` (the headings of a free-ICR path,
+        or None) as :meth:`PathTrajectory.from_points` takes them. Building it takes
+        milliseconds: do it outside the control loop, then :meth:`replace_reference`.
 
         Raises
         ------
@@ -259,7 +259,7 @@ class TrackingSession:
         """
         profile = self.params.path_profile
         profile = replace(profile, start_speed=min(abs(self._v), profile.speed))
-        reference = PathTrajectory.from_points(points, profile)
+        reference = PathTrajectory.from_points(points, profile, yaw=yaw)
         try:
             check_goal_reach(reference, self.params.arrival)
         except ParameterError as exc:
