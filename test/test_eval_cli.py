@@ -132,6 +132,16 @@ def test_json_is_strict_json_with_null_for_what_does_not_apply():
     assert result['hold_from'] == 15.0 and result['scenario']['plant'] == 'kinematic'
 
 
+def test_the_hold_window_along_a_path_is_nfmr_run_s():
+    # A path's hold figures start at 5 s, as nfmr-run and nfmr-analyze start them.
+    proc = run_eval('--path', 'config/paths/dock_sideways.csv', '--json')
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result['hold_from'] == 5.0 and result['hold_distance_p99'] is not None
+    proc = run_eval('--path', 'config/paths/dock_sideways.csv', '--hold-from', '2', '--json')
+    assert json.loads(proc.stdout.strip().splitlines()[-1])['hold_from'] == 2.0
+
+
 def test_a_closed_stdout_ends_quietly():
     proc = subprocess.Popen([sys.executable, '-m', 'nfmr_dlsmc.cli.eval', '--duration', '5'],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)

@@ -4,10 +4,11 @@ Docking sideways on the simulated chassis in the free-ICR mode (issue 38, target
 ``config/robot_free_icr.yaml`` with ``config/paths/dock_sideways.csv``: 2 m along x, then
 0.6 m sideways into a slot, facing +x; the steering the `servo` preset's (50 ms, 5 rad/s),
 declared. Measured (in process, `nfmr-eval --plant pybullet --params
-config/robot_free_icr.yaml`): arrived 0.38 mm and 0.005 mrad from the goal; distance p99
-after the first second 3.27 mm, heading p99 0.033 mrad; set points move at most 5 mrad per
+config/robot_free_icr.yaml`): arrived 0.14 mm and 0.007 mrad from the goal; distance p99
+after the first second 2.66 mm, heading p99 0.046 mrad; set points move at most 5 mrad per
 tick (the servo's 5 rad/s); steer joints at their rate limit on 0 % of the run. The PD with
-feed-forward, same file: distance p99 13.2 mm.
+feed-forward, same file: distance p99 13.1 mm. The issue's targets: within 5 mm and 10 mrad
+of the goal, p99 3 mm and 5 mrad after the first second.
 """
 
 from nfmr_dlsmc.analysis.evaluation import load_evaluation, plant_run
@@ -46,7 +47,7 @@ def test_the_robot_docks_sideways_facing_ahead_and_beats_the_pd():
     dlsmc = _dock('dlsmc')
     assert dlsmc['arrival'] == 1.0  # arrived
     assert dlsmc['goal_distance'] <= 0.002 and dlsmc['goal_yaw'] <= 0.001
-    assert dlsmc['p99'] <= 0.0045 and dlsmc['heading_p99'] <= 0.001
+    assert dlsmc['p99'] <= 0.003 and dlsmc['heading_p99'] <= 0.001
     assert dlsmc['set_point_step'] <= dlsmc['servo_step'] * (1 + 1e-9)
     assert dlsmc['at_rate_limit'] <= 0.01
     assert dlsmc['sideways'] > 0.25  # it slid: the body kept facing +x

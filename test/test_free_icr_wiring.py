@@ -288,3 +288,22 @@ def test_a_path_received_with_headings_is_followed_with_them():
               for k in range(1, 300)]
     assert states[-1]['theta_r'] > 0.0  # turning on the spot towards 1 rad
     assert states[-1]['x_d'] == 0.0  # while the position rests
+
+
+def test_standing_wheels_turn_ahead_to_the_reference_s_coming_direction():
+    """A path along +y from rest, facing +x: with align_ahead the wheels turn before it moves."""
+    path = PathTrajectory.from_points([(0.0, 0.0), (0.0, 1.0)])
+    out = {}
+    for ahead in (0.0, 0.5):
+        # Wheels slower than 5 cm/s stand: the first 0.17 s of the reference's speed-up.
+        p = params(**{'heading.rule': 'fixed', 'swerve.align_ahead': ahead,
+                      'swerve.min_wheel_speed': 0.05})
+        s = TrackingSession(p, odom_timeout=0.1)
+        s.replace_reference(path)
+        out[ahead] = [_feed(s, (0.0, 0.0, 0.0), 0.001 * k) for k in range(120)]
+    # Standing, without looking ahead the wheels stay straight.
+    assert not np.abs(out[0.0][5].steer).any() and not out[0.0][5].wheel_speed.any()
+    # Looking 0.5 s ahead they turn towards +pi/2 at the servo's 20 rad/s, standing.
+    turning = out[0.5][20]
+    assert np.allclose(np.abs(turning.steer), 0.4, atol=0.03) and not turning.wheel_speed.any()
+    assert np.allclose(np.abs(out[0.5][-1].steer), math.pi / 2)

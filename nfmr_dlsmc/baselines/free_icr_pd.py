@@ -154,23 +154,9 @@ class FreeIcrPdController(SaturatedController):
         """
         Run one control period: eqs (P1)-(P5).
 
-        Parameters
-        ----------
-        x, y, psi : float
-            Measured pose of the chassis centre [m, m, rad].
-        x_d, y_d, xdot_d, ydot_d : float
-            Reference position [m] and velocity [m/s] of the centre at this instant.
-        psi_d, psidot_d : float
-            Reference heading [rad] (any branch: the error is wrapped) and its rate
-            [rad/s], the feed-forward.
-        dt : float, optional
-            Time since the previous step [s]; default the configured period.
-
-        Returns
-        -------
-        v_x, v_y, omega : float
-            The saturated body-frame twist of the centre [m/s, m/s, rad/s].
-
+        Arguments and the saturated body-frame twist (v_x [m/s], v_y [m/s], omega [rad/s])
+        returned as :meth:`~nfmr_dlsmc.core.free_icr.FreeIcrController.step`'s, so that
+        either law runs in the same harness.
         """
         if dt is None:
             dt = self._dt

@@ -22,7 +22,7 @@ from nfmr_dlsmc.cli.common import (
     run_command,
     UsageError,
 )
-from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.steering_presets import declared_steering_note
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
@@ -66,10 +66,11 @@ def _parser() -> argparse.ArgumentParser:
                         help="'paper': 0.5 rad/s yaw-rate pulses in [5, 5.5) s and [50, 50.5) "
                              's (on pybullet added to the commanded omega before the wheel '
                              'mapping)')
-    parser.add_argument('--hold-from', type=non_negative_number, default=HOLD_FROM,
+    parser.add_argument('--hold-from', type=non_negative_number, default=None,
                         metavar='SECONDS',
-                        help='start of the window of the hold figures [s] '
-                             f'(default {HOLD_FROM:g})')
+                        help='start of the window of the hold figures [s] (default '
+                             f'{PATH_HOLD_FROM:g} along a path, as nfmr-run and nfmr-analyze; '
+                             f'else {HOLD_FROM:g})')
     parser.add_argument('--params', metavar='FILE.yaml',
                         help="controller parameter file (ROS 2 layout, node 'controller')")
     parser.add_argument('--sensing', choices=list(SENSING_PRESETS), default=None,
@@ -111,7 +112,11 @@ def _run(args) -> int:
                   flush=True)
 
     try:
-        result, cpu_s = evaluate(evaluation, args.hold_from, progress)
+        hold_from = args.hold_from
+        if hold_from is None:
+            along_path = hasattr(evaluation.trajectory, 'end_pose')
+            hold_from = PATH_HOLD_FROM if along_path else HOLD_FROM
+        result, cpu_s = evaluate(evaluation, hold_from, progress)
     finally:
         if show:
             print(file=sys.stderr)

@@ -102,6 +102,9 @@ class SwerveConfig:
     align_tolerance: float = param(0.05, 'rad', 'aligned: every wheel within this of its set '
                                    'point (epsilon); drive on', POSITIVE,
                                    also='< steer_rate * align_time')
+    align_ahead: float = param(0.0, 's', 'standing wheels turn to the angles of the '
+                               "reference's twist this far ahead, ready to drive (0: they "
+                               'hold their angles); the session applies it', NON_NEGATIVE)
     reverse_margin: float = param(0.1, 'rad', 'a wheel whose direction lies up to this beyond '
                                   'steer_limit stays at the limit instead of reversing (m; '
                                   '0: reverse at once)', NON_NEGATIVE)

@@ -559,14 +559,37 @@ class TrackingSession:
             v_x, v_y, omega = self.controller.step(*pose, *reference[:4], psi_d, psidot_d,
                                                    step)
             current = self._steer if self._measured_steer is None else self._measured_steer
+            hold = self._angles_ahead(t, psi_d, current)
             cmd = swerve_commands(v_x, v_y, omega, current, self.params.geometry,
-                                  self.params.swerve, self._aligning, hold_steer=self._steer)
+                                  self.params.swerve, self._aligning, hold_steer=hold)
             wheels, self._aligning = cmd.wheel_speed, cmd.aligning
             steer = self._servo_set_points(cmd.steer, cmd.wheel_speed != 0.0, step)
         self._v = math.hypot(v_x, v_y)
         if self.estimator is not None:
             self.estimator.command(v_x, omega, v_y)
         return v_x, v_y, omega, steer, wheels
+
+    def _angles_ahead(self, t: float, psi: float, current) -> np.ndarray:
+        """
+        Return the angles standing wheels take [rad]: ready for the reference ahead.
+
+        With ``swerve.align_ahead`` tau > 0, the wheel angles of the reference's own twist
+        at t + tau (its velocity turned into the body frame by the heading ``psi`` [rad],
+        its heading rate) when that twist moves a wheel, so that a wheel standing before a
+        start, or before and after a turn on the spot, is turned by the time it must drive;
+        else the set points held.
+        """
+        tau = self.params.swerve.align_ahead
+        if tau <= 0.0:
+            return self._steer
+        trajectory = self.params.trajectory
+        _, _, xdot_d, ydot_d = (float(v) for v in trajectory.sample(t + tau))
+        _, psidot_d = heading_reference(trajectory, self.params.heading, t + tau)
+        c, s = math.cos(psi), math.sin(psi)
+        ahead = swerve_commands(c * xdot_d + s * ydot_d, c * ydot_d - s * xdot_d, psidot_d,
+                                current, self.params.geometry, self.params.swerve,
+                                hold_steer=self._steer)
+        return ahead.steer
 
     def _servo_set_points(self, wanted: np.ndarray, driving: np.ndarray,
                           step: float | None) -> np.ndarray:
