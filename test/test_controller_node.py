@@ -667,3 +667,22 @@ def test_a_received_path_s_orientations_are_its_headings_in_free_icr():
     assert path_headings(path([(0.0, 0.0)] * 3)) is None  # unset: the heading rule
     with pytest.raises(PathError, match='pose 1 has no orientation'):
         path_headings(path([(0.0, 1.0), (0.0, 0.0), (0.0, 1.0)]))
+
+
+def test_a_free_icr_reference_that_makes_the_wheels_unwind_is_said_once(setup, log):
+    """A circle with a fixed heading sweeps the wheels round: stops, logged at activation."""
+    node, peer = setup(**{'motion': 'free_icr', 'steering.j1': 1.0, 'steering.j2': 0.0,
+                          'heading.rule': 'fixed', 'trajectory.name': 'circle'})
+    warned = [m for m in log.read() if 'to unwind by pi' in m]
+    assert len(warned) == 1 and 'no fixed heading avoids it' in warned[0]
+    sender = PathSender(peer)
+    drive(peer, 5)
+    # A straight along +x from the robot: no stop, nothing added to the answer.
+    straight = sender.send(path_message([(1.0, 4.0), (3.0, 4.0)]))
+    assert straight.level == DiagnosticStatus.OK and 'unwind' not in straight.message
+    # Round a square of 1 m sides: the direction turns by 2 pi, the wheels must unwind.
+    square = path_message([(1.0, 4.0), (2.0, 4.0), (2.0, 5.0), (1.0, 5.0), (1.0, 4.2)])
+    square.header.stamp.sec = 3
+    answer = sender.send(square)
+    assert answer.level == DiagnosticStatus.OK
+    assert 'following a new path' in answer.message and 'to unwind by pi' in answer.message

@@ -179,6 +179,24 @@ def test_the_estimator_predicts_the_sideways_motion():
     assert (x, y, psi) == pytest.approx((-0.3, 0.0, math.pi / 2), abs=1e-9)
 
 
+def test_the_estimator_is_told_the_chassis_stands_while_its_wheels_align():
+    """A quarter turn to make: the wheels stand, and the estimate must not drive on."""
+    s = TrackingSession(params(**{'trajectory.name': 'line',
+                                  'trajectory.line.heading': math.pi / 2,
+                                  'heading.rule': 'fixed', 'estimator.enabled': True}),
+                        odom_timeout=0.1)
+    s.on_steer_angles([0.0] * 4)  # the wheels stay straight: aligning all along
+    _feed(s, (0.0, 0.0, 0.0), 0.0)
+    for k in range(1, 50):  # no new odometry: the estimate is the prediction
+        out = s.tick(0.001 * k, 0.001 * k)
+        assert out.v_y > 0.4 and not out.wheel_speed.any()
+    assert s.estimator.pose(0.05) == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
+    s.on_steer_angles([math.pi / 2] * 4)  # aligned: it drives, and the estimate moves
+    for k in range(50, 100):
+        out = s.tick(0.001 * k, 0.001 * k)
+    assert out.wheel_speed.any() and s.estimator.pose(0.1)[1] > 0.01
+
+
 # -- arrival ---------------------------------------------------------------------------------
 
 

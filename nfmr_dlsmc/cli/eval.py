@@ -5,6 +5,7 @@ The scenario and its run are :mod:`nfmr_dlsmc.analysis.evaluation`'s.
 """
 
 import argparse
+from dataclasses import replace
 import json
 import sys
 
@@ -26,6 +27,7 @@ from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.steering_presets import declared_steering_note
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
+from nfmr_dlsmc.runtime.tracking_session import unwind_note
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -102,6 +104,11 @@ def _run(args) -> int:
         dlsmc, motors = evaluation.params.dlsmc, evaluation.world.motors
         note = declared_steering_note(dlsmc.steer_lag, dlsmc.steer_rate_limit,
                                       motors.steer_lag, motors.steer_rate_limit)
+        if note:
+            print(f'nfmr-eval: note: {note}', file=sys.stderr)
+    if evaluation.world is not None:  # the chassis's wheels (the kinematic plant has none)
+        note = unwind_note(replace(evaluation.params, trajectory=evaluation.trajectory),
+                           duration)
         if note:
             print(f'nfmr-eval: note: {note}', file=sys.stderr)
     show = args.plant == 'pybullet' and sys.stderr.isatty()

@@ -35,7 +35,8 @@ from nfmr_dlsmc.core.schema import check_fields, documented, FINITE, one_of, par
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
-__all__ = ['check_heading_rate', 'HEADING_RULES', 'HeadingConfig', 'heading_reference']
+__all__ = ['check_heading_rate', 'HEADING_RULES', 'HeadingConfig', 'heading_reference',
+           'heading_samples']
 
 #: The heading rules of references without a heading of their own.
 HEADING_RULES = ('tangent', 'fixed', 'toward')
@@ -90,6 +91,35 @@ def heading_reference(trajectory, config: HeadingConfig, t: float) -> tuple[floa
             (xdot_d * yddot_d - ydot_d * xddot_d) / speed_squared)
 
 
+def heading_samples(trajectory, config: HeadingConfig, times) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return psi_d [rad] and psidot_d [rad/s] at each of ``times`` [s] (an array).
+
+    :func:`heading_reference` for many times at once.
+    """
+    times = np.asarray(times, dtype=float)
+    if getattr(trajectory, 'has_yaw', False):
+        psi, rate = trajectory.yaw_reference(times)
+        return np.asarray(psi, dtype=float), np.asarray(rate, dtype=float)
+    if config.rule == 'fixed':
+        return np.full(times.shape, config.yaw), np.zeros(times.shape)  # eq. (H2)
+    x_d, y_d, xdot_d, ydot_d = (np.asarray(v, dtype=float) * np.ones(times.shape)
+                                for v in trajectory.sample(times))
+    if config.rule == 'toward':  # eq. (H3)
+        dx, dy = config.toward_x - x_d, config.toward_y - y_d
+        return np.arctan2(dy, dx), (dy * xdot_d - dx * ydot_d) / (dx * dx + dy * dy)
+    xddot_d, yddot_d = (np.asarray(v, dtype=float) * np.ones(times.shape)
+                        for v in trajectory.acceleration(times))
+    speed_squared = xdot_d * xdot_d + ydot_d * ydot_d  # eq. (H1)
+    moving = speed_squared >= _REST_SPEED * _REST_SPEED
+    rest = getattr(trajectory, 'heading', None)
+    at_rest = (np.asarray(rest(times), dtype=float) * np.ones(times.shape) if rest is not None
+               else np.zeros(times.shape))
+    safe = np.where(moving, speed_squared, 1.0)
+    return (np.where(moving, np.arctan2(ydot_d, xdot_d), at_rest),
+            np.where(moving, (xdot_d * yddot_d - ydot_d * xddot_d) / safe, 0.0))
+
+
 def check_heading_rate(trajectory, config: HeadingConfig, omega_max: float, duration: float,
                        step: float = 0.01) -> None:
     """
@@ -109,8 +139,8 @@ def check_heading_rate(trajectory, config: HeadingConfig, omega_max: float, dura
     name = ('trajectory.path.file' if getattr(trajectory, 'has_yaw', False)
             else f'{HeadingConfig.prefix}.rule')
     value = 'its heading column' if name.endswith('file') else config.rule
+    times = np.arange(0.0, duration + step, step)
     if config.rule == 'toward' and name.endswith('rule'):
-        times = np.arange(0.0, duration + step, step)
         x_d, y_d = (np.asarray(v, dtype=float) for v in trajectory.sample(times)[:2])
         gap = np.hypot(config.toward_x - x_d, config.toward_y - y_d)
         k = int(np.argmin(gap))
@@ -119,9 +149,10 @@ def check_heading_rate(trajectory, config: HeadingConfig, omega_max: float, dura
                                  f'point it faces ({config.toward_x:g}, {config.toward_y:g}) m '
                                  f'at t = {times[k]:.2f} s: must keep heading.toward_clearance '
                                  f'= {config.toward_clearance:g} m')
-    for t in np.arange(0.0, duration + step, step).tolist():
-        _, rate = heading_reference(trajectory, config, t)
-        if not abs(rate) <= omega_max:
-            raise ParameterError(name, value, f'asks for a yaw rate of {rate:.3g} rad/s at '
-                                 f't = {t:.2f} s: must stay within limits.omega_max = '
-                                 f'{omega_max:g} rad/s', 'rad/s')
+    rates = heading_samples(trajectory, config, times)[1]
+    beyond = np.flatnonzero(~(np.abs(rates) <= omega_max))
+    if beyond.size:
+        t, rate = float(times[beyond[0]]), float(rates[beyond[0]])
+        raise ParameterError(name, value, f'asks for a yaw rate of {rate:.3g} rad/s at '
+                             f't = {t:.2f} s: must stay within limits.omega_max = '
+                             f'{omega_max:g} rad/s', 'rad/s')

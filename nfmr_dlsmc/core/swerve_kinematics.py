@@ -19,7 +19,8 @@ phi_i + k pi rolling at (-1)^k s_i / r (r the wheel radius) realises u_i for eve
 k. Of these angles the set point delta_i is the one within the joint's range
 |delta| <= delta_max nearest the current angle c_i (measured, clipped into the range as
 c'_i; for a point outside the range the order of the distances is that of the range's
-end):
+end), or nearest an anchor given in its place (the branch planned along the reference
+ahead, :mod:`~nfmr_dlsmc.core.wheel_branches`):
 
     k_i = round((c'_i - phi_i) / pi),   delta_i = phi_i + k_i pi,                          (2)
     then  delta_i = delta_max                 if delta_max < delta_i <= delta_max + m,
@@ -105,6 +106,11 @@ class SwerveConfig:
     align_ahead: float = param(0.0, 's', 'standing wheels turn to the angles of the '
                                "reference's twist this far ahead, ready to drive (0: they "
                                'hold their angles); the session applies it', NON_NEGATIVE)
+    branch_horizon: float = param(30.0, 's', 'a wheel starts on, or unwinds to, the branch '
+                                  '(angle or angle + pi, reversed) that stays within '
+                                  "steer_limit longest along the reference's next this many "
+                                  'seconds (0: the branch nearest its angle now); the session '
+                                  'applies it', NON_NEGATIVE)
     reverse_margin: float = param(0.1, 'rad', 'a wheel whose direction lies up to this beyond '
                                   'steer_limit stays at the limit instead of reversing (m; '
                                   '0: reverse at once)', NON_NEGATIVE)
@@ -152,7 +158,7 @@ def _finite(name: str, value) -> float:
 
 def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry: RobotGeometry,
                     config: SwerveConfig, aligning: bool = False,
-                    hold_steer=None) -> SwerveCommands:
+                    hold_steer=None, near=None) -> SwerveCommands:
     """
     Return the wheel set points for the centre's twist, chosen for the wheels' angles now.
 
@@ -177,6 +183,10 @@ def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry:
     hold_steer : array-like (4,), optional
         The angles [rad] standing wheels keep, e.g. the last set points; default the
         current angles.
+    near : array-like (4,), optional
+        The angles [rad] each wheel's branch is chosen nearest, c_i of eq. (2), e.g. the
+        anchors of :func:`~nfmr_dlsmc.core.wheel_branches.branch_anchors`; default (and
+        for a NaN) the current angles.
 
     Raises
     ------
@@ -192,10 +202,12 @@ def swerve_commands(vx: float, vy: float, omega: float, current_steer, geometry:
         _finite(f'current_steer {name}', angle)
     limit = config.steer_limit
     hold = current if hold_steer is None else [float(h) for h in hold_steer]
+    anchors = current if near is None else [
+        c if math.isnan(a) else a for a, c in zip((float(a) for a in near), current)]
     steer, speed = [], []
-    for (x, y), c, h in zip(geometry.wheel_positions.tolist(), current, hold):
+    for (x, y), c, h, a in zip(geometry.wheel_positions.tolist(), current, hold, anchors):
         ux, uy = vx - omega * y, vy + omega * x  # eq. (1) [m/s]
-        wheel_speed, held = math.hypot(ux, uy), min(max(c, -limit), limit)  # [m/s], [rad]
+        wheel_speed, held = math.hypot(ux, uy), min(max(a, -limit), limit)  # [m/s], [rad]
         if wheel_speed < config.min_wheel_speed:
             steer.append(min(max(h, -limit), limit))
             speed.append(0.0)

@@ -64,6 +64,7 @@ made up (why not a thread waking on each ``/clock``: doc/performance.md).
 """
 
 from contextlib import contextmanager
+from dataclasses import replace
 import math
 import re
 import sys
@@ -90,7 +91,7 @@ from nfmr_dlsmc.runtime.params import (
     controller_params,
     session_options,
 )
-from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession
+from nfmr_dlsmc.runtime.tracking_session import STATE_FIELDS, TrackingSession, unwind_note
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import JumpThreshold
 from rclpy.duration import Duration
@@ -345,6 +346,9 @@ class ControllerNode(SchemaLifecycleNode):
                 self._active = True
             result = super().on_activate(state)  # the lifecycle publishers publish from here
             self._publish_path()
+            note = unwind_note(self.session.params)
+            if note:
+                self.get_logger().warning(note)
             if self.session.fusion is None:
                 self._odom_subs = [self._inputs.create_subscription(
                     Odometry, 'odom', self._on_odom, COMMAND_QOS)]
@@ -600,6 +604,9 @@ class ControllerNode(SchemaLifecycleNode):
         self._publish_path(reference)
         summary = (f'following a new path from the next tick: {len(reference.points)} points, '
                    f'{reference.length:.2f} m, {reference.duration:.1f} s')
+        note = unwind_note(replace(session.params, trajectory=reference))
+        if note:
+            summary += f'; {note}'
         self.get_logger().info(f'{topic}: {summary}')
         self._answer_path(key, path_answer(msg, topic, None, summary))
 

@@ -34,6 +34,7 @@ from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import ParameterError
+from nfmr_dlsmc.core.wheel_branches import BranchPlan, reference_twists, reference_unwind_note
 from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
 from nfmr_dlsmc.runtime.joint_states import wheel_sample
 from nfmr_dlsmc.runtime.odometry_gate import OdometryGate, OdometryRules
@@ -136,6 +137,27 @@ def _law_state(law) -> dict:
         float(law.v_saturated), float(law.omega_saturated))))
 
 
+#: How far [s] :func:`unwind_note` looks along a reference without an end (a built-in one).
+UNWIND_LOOK = 120.0
+
+
+def unwind_note(params: ControllerParams, duration: float | None = None) -> str | None:
+    """
+    Return a line on the stops the wheels make to unwind along the reference (None: none).
+
+    Only in the ``free_icr`` mode
+    (:func:`~nfmr_dlsmc.core.wheel_branches.reference_unwind_note`), over ``duration`` [s],
+    by default a path's own, else :data:`UNWIND_LOOK`.
+    """
+    if params.motion != 'free_icr':
+        return None
+    trajectory = params.trajectory
+    if duration is None:
+        duration = getattr(trajectory, 'duration', UNWIND_LOOK)
+    return reference_unwind_note(trajectory, params.heading, params.swerve,
+                                 params.geometry.wheel_positions, duration)
+
+
 class TrackingSession:
     """
     Controller, reference and steering for one run.
@@ -199,6 +221,7 @@ class TrackingSession:
         self._aligning = False  # the wheel mapping's stop-align-drive state (free_icr)
         self._wanted = None  # the steer angles [rad] the mapping wanted last (free_icr)
         self._psi_d = math.nan  # the heading reference [rad] of the last tick (free_icr)
+        self._branches = self._branch_plan(params)  # each wheel's branch (free_icr)
         self._v = 0.0  # speed [m/s] last commanded
         self._reported = None  # the fault kind last reported (None: tracking)
         self._restart_pending = False  # a restart happened, not reported yet
@@ -220,6 +243,8 @@ class TrackingSession:
         """Take new gains, limits or estimator noise; they take effect at the next tick."""
         if self._received:  # the path received, not the file's
             params = replace(params, trajectory=self.params.trajectory, trajectory_name=PATH)
+        if params.swerve != self.params.swerve:
+            self._branches = self._branch_plan(params)
         self.params = params
         self.law.config = params.dlsmc
         if self.estimator is not None:
@@ -294,6 +319,8 @@ class TrackingSession:
         self._outcome = 0.0
         self._t = 0.0
         self._tracked_last = False
+        if self._branches is not None:
+            self._branches.reset()
         # Its time 0 is the first tick that tracks: a tick stopped by stale odometry may
         # come on another clock (the node's watchdog).
         self._new_origin = self._t0 is not None
@@ -452,6 +479,8 @@ class TrackingSession:
         self._t = 0.0
         self._tracked_last = False
         self._aligning = False
+        if self._branches is not None:
+            self._branches.reset()
         self._restart_pending = True
         self.restarts += 1
 
@@ -559,17 +588,50 @@ class TrackingSession:
             v_x, v_y, omega = self.controller.step(*pose, *reference[:4], psi_d, psidot_d,
                                                    step)
             current = self._steer if self._measured_steer is None else self._measured_steer
-            hold = self._angles_ahead(t, psi_d, current)
+            near = self._anchors(t, psi_d, psidot_d, reference, current)
+            hold = self._angles_ahead(t, psi_d, current, near)
             cmd = swerve_commands(v_x, v_y, omega, current, self.params.geometry,
-                                  self.params.swerve, self._aligning, hold_steer=hold)
+                                  self.params.swerve, self._aligning, hold_steer=hold,
+                                  near=near)
             wheels, self._aligning = cmd.wheel_speed, cmd.aligning
             steer = self._servo_set_points(cmd.steer, cmd.wheel_speed != 0.0, step)
         self._v = math.hypot(v_x, v_y)
         if self.estimator is not None:
-            self.estimator.command(v_x, omega, v_y)
+            if self._aligning:  # the wheels stand to turn: so does the chassis
+                self.estimator.command(0.0, 0.0, 0.0)
+            else:
+                self.estimator.command(v_x, omega, v_y)
         return v_x, v_y, omega, steer, wheels
 
-    def _angles_ahead(self, t: float, psi: float, current) -> np.ndarray:
+    @staticmethod
+    def _branch_plan(params: ControllerParams) -> BranchPlan | None:
+        """Return the wheels' branch plan of ``swerve.branch_horizon`` (None: off, or unicycle)."""
+        swerve = params.swerve
+        if params.motion != 'free_icr' or swerve.branch_horizon <= 0.0:
+            return None
+        return BranchPlan(params.geometry.wheel_positions, swerve.steer_limit,
+                          swerve.reverse_margin, swerve.min_wheel_speed, swerve.branch_horizon)
+
+    def _anchors(self, t: float, psi_d: float, psidot_d: float, reference: tuple,
+                 current) -> list | None:
+        """
+        Return the angles [rad] the wheels' branches are chosen nearest (None: their own).
+
+        The branch plan's anchors (:class:`~nfmr_dlsmc.core.wheel_branches.BranchPlan`) for
+        the reference's twist at trajectory time ``t`` [s], its velocity
+        ``reference[2:4]`` turned into the body frame by the heading reference ``psi_d``
+        [rad]; planned along the reference ahead where a wheel needs it.
+        """
+        if self._branches is None:
+            return None
+        c, s = math.cos(psi_d), math.sin(psi_d)
+        xdot_d, ydot_d = reference[2], reference[3]
+        trajectory, heading = self.params.trajectory, self.params.heading
+        return self._branches.anchors(
+            (c * xdot_d + s * ydot_d, c * ydot_d - s * xdot_d, psidot_d), current,
+            lambda offsets: reference_twists(trajectory, heading, t + offsets))
+
+    def _angles_ahead(self, t: float, psi: float, current, near=None) -> np.ndarray:
         """
         Return the angles standing wheels take [rad]: ready for the reference ahead.
 
@@ -577,7 +639,7 @@ class TrackingSession:
         at t + tau (its velocity turned into the body frame by the heading ``psi`` [rad],
         its heading rate) when that twist moves a wheel, so that a wheel standing before a
         start, or before and after a turn on the spot, is turned by the time it must drive;
-        else the set points held.
+        else the set points held. Each on the branch nearest ``near`` (the anchors) if given.
         """
         tau = self.params.swerve.align_ahead
         if tau <= 0.0:
@@ -588,7 +650,7 @@ class TrackingSession:
         c, s = math.cos(psi), math.sin(psi)
         ahead = swerve_commands(c * xdot_d + s * ydot_d, c * ydot_d - s * xdot_d, psidot_d,
                                 current, self.params.geometry, self.params.swerve,
-                                hold_steer=self._steer)
+                                hold_steer=self._steer, near=near)
         return ahead.steer
 
     def _servo_set_points(self, wanted: np.ndarray, driving: np.ndarray,
