@@ -5,7 +5,7 @@ import pickle
 
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
-from nfmr_dlsmc.core.path_heading import heading_bounds, heading_curve, spin_curve, unwrapped
+from nfmr_dlsmc.core.path_heading import flat_ended_curve, heading_bounds, spin_curve, unwrapped
 from nfmr_dlsmc.core.path_reference import (
     MAX_YAW,
     MERGE_DISTANCE,
@@ -307,7 +307,7 @@ def test_it_survives_pickling_with_yaw():
 # -- the pieces -----------------------------------------------------------------------------
 
 def test_the_bounds_of_a_heading_curve_are_its_largest_slope_and_bend():
-    curve = heading_curve([0.0, 1.0, 1.5, 4.0], [0.0, 1.0, -0.5, 2.0])
+    curve = flat_ended_curve([0.0, 1.0, 1.5, 4.0], [0.0, 1.0, -0.5, 2.0])
     s = np.linspace(0.0, 4.0, 9)
     slope, bend = heading_bounds(curve, s)
     for k in range(len(s) - 1):

@@ -6,7 +6,7 @@ than it moves, so the points of a path may carry its heading psi [rad].
 :class:`~nfmr_dlsmc.core.path_reference.PathTrajectory` builds the heading reference from
 these pieces:
 
-- :func:`heading_curve`: psi through the points' yaws as a function of the arc length at
+- :func:`flat_ended_curve`: psi through the points' yaws as a function of the arc length at
   which each point lies on the rounded path (or of the stamps of a timed path), C1, no
   overshoot between two points (the slopes of a PCHIP), flat at both ends;
 - :func:`heading_bounds`: the largest |dpsi/ds| and |d^2 psi/ds^2| on each interval of the
@@ -22,7 +22,7 @@ import math
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
-__all__ = ['heading_bounds', 'heading_curve', 'spin_curve', 'unwrapped']
+__all__ = ['flat_ended_curve', 'heading_bounds', 'spin_curve', 'unwrapped']
 
 
 def unwrapped(yaw) -> np.ndarray:
@@ -36,32 +36,36 @@ def unwrapped(yaw) -> np.ndarray:
     return np.unwrap(np.asarray(yaw, dtype=float))
 
 
-def heading_curve(knots, yaw) -> CubicHermiteSpline:
+def flat_ended_curve(knots, values) -> CubicHermiteSpline:
     """
-    Return the C1 cubic psi(u) through (``knots``, ``yaw``), flat at both ends.
+    Return the C1 cubic through (``knots``, ``values``), flat at both ends.
+
+    A path's heading psi(s) over arc length or psi(t) over its stamps, and a timed path's
+    arc length s(t) over its stamps (at rest at both ends).
 
     Parameters
     ----------
     knots : array_like
         (N,) increasing abscissae: the arc length [m] of each point, or its stamp [s].
-    yaw : array_like
-        (N,) headings [rad], unwrapped.
+    values : array_like
+        (N,) the values there: headings [rad], unwrapped, or arc lengths [m].
 
     Notes
     -----
     The interior slopes are a PCHIP's (monotone between two points: no overshoot, and flat
-    where the yaw stays the same); the end slopes are 0, so that the heading's rate is 0
-    where the reference starts and stops and joins a spin on the spot continuously.
+    where the value stays the same); the end slopes are 0, so that the heading's rate is 0
+    where the reference starts and stops and joins a spin on the spot continuously, and a
+    timed path starts and ends at rest.
 
     """
     knots = np.asarray(knots, dtype=float)
-    yaw = np.asarray(yaw, dtype=float)
+    values = np.asarray(values, dtype=float)
     if len(knots) > 2:
-        slopes = PchipInterpolator(knots, yaw).derivative()(knots)
+        slopes = PchipInterpolator(knots, values).derivative()(knots)
     else:
         slopes = np.zeros(len(knots))
     slopes[0] = slopes[-1] = 0.0
-    return CubicHermiteSpline(knots, yaw, slopes)
+    return CubicHermiteSpline(knots, values, slopes)
 
 
 def heading_bounds(curve: PPoly, s) -> tuple[np.ndarray, np.ndarray]:
@@ -71,7 +75,7 @@ def heading_bounds(curve: PPoly, s) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     curve : scipy.interpolate.PPoly
-        A cubic psi(s) [rad] (:func:`heading_curve`).
+        A cubic psi(s) [rad] (:func:`flat_ended_curve`).
     s : ndarray
         (n,) increasing grid [m].
 

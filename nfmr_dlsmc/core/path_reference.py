@@ -92,11 +92,11 @@ from dataclasses import dataclass
 import math
 from typing import ClassVar
 
-from nfmr_dlsmc.core.path_heading import heading_bounds, heading_curve, spin_curve, unwrapped
+from nfmr_dlsmc.core.path_heading import flat_ended_curve, heading_bounds, spin_curve, unwrapped
 from nfmr_dlsmc.core.schema import check_fields, documented, NON_NEGATIVE, param, POSITIVE
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator, PPoly
+from scipy.interpolate import CubicSpline, PPoly
 from scipy.ndimage import gaussian_filter1d
 
 __all__ = ['CUSP_ANGLE', 'MAX_COORDINATE', 'MAX_STAMP', 'MAX_YAW', 'MERGE_DISTANCE',
@@ -298,7 +298,7 @@ class PathTrajectory:
         if stamps is None:
             timing = _speed_profile(s, _bend(curve, s), _bend_rate(curve), profile)
         else:
-            timing = _timed(stamps, vertex_s)
+            timing = flat_ended_curve(stamps, vertex_s)
         return cls._built(xy, stamps, None, profile, curve, timing, dense[0], dense[-1], ())
 
     @classmethod
@@ -356,13 +356,13 @@ class PathTrajectory:
             vertex_s[a:b + 1] = local_s + offset
             breaks.append(curve.x[1:] + offset if breaks else curve.x + offset)
             coefficients.append(np.asarray(curve.c))
-            psi = heading_curve(local_s, headings[a:b + 1])
+            psi = flat_ended_curve(local_s, headings[a:b + 1])
             shapes.append((s, curve, psi, offset))
             offset += float(curve.x[-1])
         curve = PPoly(np.concatenate(coefficients, axis=1), np.concatenate(breaks))
         if stamps is not None:
-            timing = _timed(stamps, vertex_s)
-            psi_t = heading_curve(stamps, headings)
+            timing = flat_ended_curve(stamps, vertex_s)
+            psi_t = flat_ended_curve(stamps, headings)
             phases = ((float(stamps[0]), float(stamps[-1]), False, psi_t),)
             return cls._built(xy, stamps, headings, profile, curve, timing, first, last,
                               phases)
@@ -732,18 +732,29 @@ def _checked_with_yaw(raw, xy_all, headings, v_max: float, omega_max: float):
 
 def _check_yaw_rates(xy, stamps, psi, kept, raw, omega_max: float) -> None:
     """Refuse stamps asking for a yaw rate above ``omega_max`` [rad/s] between two points."""
+    _refuse_faster(xy, stamps, kept, raw, np.abs(np.diff(psi)), omega_max,
+                   lambda angle, seconds: f'the stamps ask for a yaw rate of '
+                   f'{angle / seconds:.3g} rad/s between this point and the one before '
+                   f"({angle:.3g} rad in {seconds:.3g} s); the robot's omega_max is "
+                   f'{omega_max:g} rad/s')
+
+
+def _refuse_faster(xy, stamps, kept, raw, change, limit: float, says) -> None:
+    """
+    Refuse the first point whose ``change`` from the one before exceeds ``limit`` per second.
+
+    ``change`` (N - 1,) is per step between the merged points ``xy`` stamped ``stamps``;
+    ``says(change, seconds)`` words the refusal (:class:`PathError`, naming the point by its
+    index in ``raw``, ``kept``). A limit of 1e300 a second overflows: no step is too fast.
+    """
     step = np.diff(stamps)
-    turn = np.abs(np.diff(psi))
     with np.errstate(over='ignore'):
-        fast = np.flatnonzero(turn > omega_max * step)
+        fast = np.flatnonzero(change > limit * step)
     if fast.size:
         k = int(fast[0]) + 1
         i = kept[k]
-        angle, seconds = float(turn[k - 1]), float(step[k - 1])
-        raise PathError(f'{_where(i, xy[k])}: the stamps ask for a yaw rate of '
-                        f'{angle / seconds:.3g} rad/s between this point and the one before '
-                        f"({angle:.3g} rad in {seconds:.3g} s); the robot's omega_max is "
-                        f'{omega_max:g} rad/s', i, tuple(raw[i].tolist()))
+        raise PathError(f'{_where(i, xy[k])}: ' + says(float(change[k - 1]), float(step[k - 1])),
+                        i, tuple(raw[i].tolist()))
 
 
 def _runs(xy) -> list[tuple[int, int]]:
@@ -792,18 +803,11 @@ def _check_speeds(xy, stamps, kept, raw, v_max: float) -> None:
 
     ``xy`` and ``stamps`` are the merged points, ``kept`` their indices in ``raw``.
     """
+    _refuse_faster(xy, stamps, kept, raw, np.hypot(*np.diff(xy, axis=0).T), v_max,
+                   lambda length, seconds: f'the stamps ask for {length / seconds:.3g} m/s '
+                   f'between this point and the one before ({length:.3g} m in '
+                   f"{seconds:.3g} s); the robot's v_max is {v_max:g} m/s")
     step = np.diff(stamps)
-    distance = np.hypot(*np.diff(xy, axis=0).T)
-    with np.errstate(over='ignore'):  # v_max of 1e300 m/s: no stamps are too close
-        fast = np.flatnonzero(distance > v_max * step)
-    if fast.size:
-        k = int(fast[0]) + 1
-        i = kept[k]
-        length, seconds = float(distance[k - 1]), float(step[k - 1])
-        raise PathError(f'{_where(i, xy[k])}: the stamps ask for {length / seconds:.3g} m/s '
-                        f'between this point and the one before ({length:.3g} m in '
-                        f"{seconds:.3g} s); the robot's v_max is {v_max:g} m/s", i,
-                        tuple(raw[i].tolist()))
     close = np.flatnonzero(step < MIN_STAMP_STEP)
     if close.size:
         k = int(close[0]) + 1
@@ -1098,13 +1102,3 @@ def _yaw_limited(s, limit, heading: PPoly, profile: PathProfile) -> np.ndarray:
     down = 2.0 * np.minimum(profile.deceleration, share) * ds
     ramp = np.r_[np.cumsum(down[::-1])[::-1], 0.0]
     return ramp + np.minimum.accumulate((squared - ramp)[::-1])[::-1]
-
-
-def _timed(stamps, vertex_s) -> PPoly:
-    """Return the monotone s(t) through (stamps, vertex_s), at rest at both ends."""
-    if len(stamps) > 2:
-        slopes = PchipInterpolator(stamps, vertex_s).derivative()(stamps)
-    else:
-        slopes = np.zeros(len(stamps))
-    slopes[0] = slopes[-1] = 0.0
-    return CubicHermiteSpline(stamps, vertex_s, slopes)

@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import math
 
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
-from nfmr_dlsmc.core.heading_reference import heading_reference, HeadingConfig
+from nfmr_dlsmc.core.heading_reference import heading_samples, HeadingConfig
 from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMode
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import check_finite, check_positive, ParameterError
@@ -125,6 +125,21 @@ def check_start(controller, x0, duration: float, dt: float) -> tuple[tuple, int]
     return x0, n
 
 
+def _start(controller, trajectory, x0, duration: float, dt: float, disturbance) -> tuple:
+    """
+    Return (x0, t, reference, acceleration, disturbance) of a run, the controller reset.
+
+    ``check_start``'s checks; t [s] the n step times; the reference (n, 4) and its
+    acceleration (n, 2) at them; the disturbance [rad/s] there (zeros without one).
+    """
+    x0, n = check_start(controller, x0, duration, dt)
+    t = np.arange(n) * dt
+    ref, acc = sample_reference(trajectory, t)
+    dist = disturbance.sample(t) if disturbance is not None else np.zeros(n)
+    controller.reset()
+    return x0, t, ref, acc, dist
+
+
 def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
              disturbance: YawRateDisturbance | None = None) -> SimResult:
     """
@@ -153,14 +168,9 @@ def simulate(controller, trajectory, x0, duration: float, dt: float = 0.001,
         Yaw-rate disturbance varpi(t); none by default.
 
     """
-    x0, n = check_start(controller, x0, duration, dt)
-    x, y, theta = x0
-
-    t = np.arange(n) * dt
-    ref, acc = sample_reference(trajectory, t)
-    dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
-
-    controller.reset()
+    (x, y, theta), t, ref, acc, dist = _start(controller, trajectory, x0, duration, dt,
+                                              disturbance)
+    n = t.size
     step = controller.step
     telemetry = controller.telemetry
     cos, sin = math.cos, math.sin
@@ -217,18 +227,13 @@ def simulate_free_icr(controller, trajectory, heading: HeadingConfig, x0, durati
         The heading rule of a reference without a heading of its own.
 
     """
-    x0, n = check_start(controller, x0, duration, dt)
-    x, y, psi = x0
-    t = np.arange(n) * dt
-    ref, _ = sample_reference(trajectory, t)
-    dist = (disturbance.sample(t) if disturbance is not None else np.zeros(n))
-    controller.reset()
-    width = 6 + len(controller.TELEMETRY_FIELDS)
-    rows = np.empty((n, width))
+    (x, y, psi), t, ref, _, dist = _start(controller, trajectory, x0, duration, dt,
+                                          disturbance)
+    headings = heading_samples(trajectory, heading, t)
+    rows = np.empty((t.size, 6 + len(controller.TELEMETRY_FIELDS)))
     cos, sin = math.cos, math.sin
-    for k, (t_k, x_d, y_d, xdot_d, ydot_d, varpi) in enumerate(
-            zip(t.tolist(), *ref.T.tolist(), dist.tolist())):
-        psi_d, psidot_d = heading_reference(trajectory, heading, t_k)
+    for k, (x_d, y_d, xdot_d, ydot_d, psi_d, psidot_d, varpi) in enumerate(
+            zip(*ref.T.tolist(), *(h.tolist() for h in headings), dist.tolist())):
         v_x, v_y, w = controller.step(x, y, psi, x_d, y_d, xdot_d, ydot_d, psi_d, psidot_d,
                                       None)
         rows[k] = (x, y, psi, v_x, v_y, w) + controller.telemetry()
