@@ -385,3 +385,61 @@ def test_along_a_path_every_law_follows_it_and_arrives_by_the_same_rule(tmp_path
 def test_params_without_a_path_is_refused(tmp_path):
     assert compare_cli.main(['--params', str(shipped_config('robot_case1.yaml')), '--out',
                              str(tmp_path / 'r')]) == 2
+
+
+FREE_ICR_FILE = 'config/robot_free_icr.yaml'
+
+
+@pytest.mark.sim  # refused before a step, but --plant pybullet
+@pytest.mark.parametrize('argv, message', [
+    (['--plant', 'pybullet', '--matrix'], '--matrix compares the unicycle laws'),
+    ([], 'give --plant pybullet'),
+    (['--plant', 'pybullet', '--controllers', 'stanley'],
+     '--controllers stanley: a unicycle law, not for a free-ICR --params file (its laws: '
+     'dlsmc free_icr_pd)'),
+])
+def test_a_free_icr_file_is_compared_with_its_own_laws_on_the_chassis(
+        capsys, tmp_path, argv, message):
+    out = tmp_path / 'report'
+    assert compare_cli.main(['--params', FREE_ICR_FILE, '--out', str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_the_free_icr_laws_are_refused_for_a_unicycle_comparison(capsys):
+    assert compare_cli.main(['--controllers', 'free_icr_pd', '--out', 'unused']) == 2
+    assert '--controllers free_icr_pd: needs motion: free_icr in --params' in (
+        capsys.readouterr().err)
+
+
+@pytest.mark.sim  # refused before a step, but --plant pybullet
+def test_a_free_icr_file_without_a_path_is_refused_naming_its_trajectory(capsys, tmp_path):
+    flat_file = tmp_path / 'lemniscate.yaml'
+    text = open(FREE_ICR_FILE).read().replace('name: path ', 'name: lemniscate ')
+    flat_file.write_text(text)
+    assert compare_cli.main(['--params', str(flat_file), '--plant', 'pybullet',
+                             '--out', str(tmp_path / 'r')]) == 2
+    assert "its reference is trajectory.name 'lemniscate'; the free-ICR comparison follows a " \
+        'path' in capsys.readouterr().err
+
+
+@pytest.mark.sim
+def test_the_free_icr_comparison_runs_each_law_as_nfmr_eval_does(tmp_path):
+    """Both laws along the docking path for 6 s; the DLSMC's figures are nfmr-eval's."""
+    from nfmr_dlsmc.analysis.evaluation import evaluate, load_evaluation
+    out = tmp_path / 'report'
+    assert compare_cli.main(['--params', FREE_ICR_FILE, '--plant', 'pybullet', '--duration',
+                             '6', '--jobs', '1', '--out', str(out)]) == 0
+    document = json.loads((out / 'results.json').read_text())
+    assert document['motion'] == 'free_icr' and document['params'] == FREE_ICR_FILE
+    runs = document['path']['0,0,0']
+    assert set(runs) == {'dlsmc', 'free_icr_pd'}
+    text = (out / 'report.md').read_text()
+    assert 'In the free-ICR mode (`motion: free_icr` of `config/robot_free_icr.yaml`)' in text
+    assert '| PD + feed-forward (free ICR) |' in text and (out / 'path_runs.png').exists()
+    alone, _ = evaluate(load_evaluation('pybullet', 'dlsmc', None, 6.0, 'none', FREE_ICR_FILE),
+                        5.0)
+    assert runs['dlsmc']['hold_distance_p99'] == pytest.approx(alone['hold_distance_p99'],
+                                                               rel=1e-9)
+    for run in runs.values():  # of psi - psi_d: the docking run faces +x all along
+        assert run['hold_theta_e_p99'] < 1e-3

@@ -22,7 +22,7 @@ from nfmr_dlsmc.analysis.comparison_metrics import (
     SURFACE_TOLERANCE,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LATERAL, CASE1_LONGITUDINAL, CASE2
-from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES
+from nfmr_dlsmc.baselines.registry import controller_label, CONTROLLER_NAMES, FREE_ICR_CONTROLLERS
 from nfmr_dlsmc.core.gains import InnerLoopGains, InputLimits, OuterLoopGains
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, CONVERGENCE_TOLERANCE, format_metric
 from nfmr_dlsmc.core.sensing import SENSING_PRESETS
@@ -613,13 +613,14 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
         f'`{gains_path}`. {len(runs)} runs on {where} in {seconds:.1f} s '
         '(`nfmr-compare --path`).',
         '',
+        *_free_icr_note(document),
         *_sensing_note(document.get('sensing', 'ideal')),
         f'## Holding the path (t >= {hold_from:g} s) and arriving',
         '',
     ]
     columns = HOLD_COLUMNS + ARRIVAL_COLUMNS
     lines += _table_head('controller', [header for _, header, _ in columns])
-    for name in CONTROLLER_NAMES:
+    for name in CONTROLLER_NAMES + FREE_ICR_CONTROLLERS:
         if name in runs:
             cells = [cell(runs[name].get(key)) for key, _, cell in columns]
             lines.append(f'| {controller_label(name)} | ' + ' | '.join(cells) + ' |')
@@ -627,6 +628,17 @@ def write_path_report(path: Path, document: dict, figures: dict, gains_path: Pat
     for name, caption in figures.values():
         lines += [f'![{caption}]({name})', '', f'*{caption}*', '']
     path.write_text('\n'.join(lines))
+
+
+def _free_icr_note(document: dict) -> list[str]:
+    """Return the report's paragraph on the free-ICR mode (none for the unicycle laws)."""
+    if document.get('motion') != 'free_icr':
+        return []
+    return [f"In the free-ICR mode (`motion: free_icr` of `{document['params']}`): every law "
+            'drives the chassis centre in any direction and tracks the heading reference '
+            "ψd too, through that file's wheel mapping (`swerve.*`) and, on the chassis, "
+            "its `sim` section; the DLSMC's gains are that file's, the others' the gains "
+            "file's. Each run is the one `nfmr-eval --params` makes; θe is ψ − ψd.", '']
 
 
 def _conditions(document: dict) -> str:

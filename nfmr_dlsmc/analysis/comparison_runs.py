@@ -4,7 +4,7 @@ The runs of the comparison (``nfmr-compare``): every controller on every scenari
 They are spread over worker processes; each gives its metrics and its decimated series.
 """
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from nfmr_dlsmc.analysis.comparison_metrics import run_metrics
 from nfmr_dlsmc.analysis.comparison_scenarios import (
@@ -13,6 +13,7 @@ from nfmr_dlsmc.analysis.comparison_scenarios import (
     Scenario,
     SCENARIOS,
 )
+from nfmr_dlsmc.analysis.evaluation import load_evaluation, plant_run
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
 from nfmr_dlsmc.core.gains import InputLimits
@@ -85,6 +86,73 @@ def path_tasks(names, blocks: dict, trajectory, arrival, duration: float,
              sensing, steering) for name in names]
 
 
+@dataclass(frozen=True)
+class FileRun:
+    """
+    A law run as ``nfmr-eval`` runs it: a parameter file's reference, law and chassis.
+
+    The free-ICR comparison (``motion: free_icr``): every law gets the file's parameters
+    (heading, wheel mapping, branch plan, estimator) and its ``sim`` section's chassis, the
+    DLSMC its gains, another law its block of ``gains_file``
+    (:func:`~nfmr_dlsmc.analysis.evaluation.load_evaluation`).
+
+    Attributes
+    ----------
+    params_file : str
+    path : str or None
+        A path file instead of the file's reference.
+    gains_file : str
+    duration : float
+        [s]
+    dt : float
+        Control period [s] (the file's).
+
+    """
+
+    params_file: str
+    path: str | None
+    gains_file: str
+    duration: float
+    dt: float
+
+    def run(self, name: str, plant: str, sensing: str | None, steering: str | None) -> tuple:
+        """Return (SimResult, the reference's last pose or None) of law ``name``."""
+        ev = load_evaluation(plant, name, None, self.duration, 'none', self.params_file,
+                             self.gains_file, None, None, sensing, self.path, steering)
+        result = plant_run(ev.plant, ev.controller, ev.params, ev.trajectory, ev.x0,
+                           ev.duration, ev.world, None, None, ev.encoders)
+        return (replace(result, telemetry=_as_unicycle_signals(result.telemetry)),
+                getattr(ev.trajectory, 'end_pose', None))
+
+
+def _as_unicycle_signals(telemetry: dict) -> dict:
+    """
+    Return a free-ICR law's telemetry under the names the comparison reads.
+
+    psi_d, psi_e -> theta_d, theta_e (the heading reference and its error: D37); the PD's
+    e_x, e_y -> x_e, y_e; a signal the law has not (the PD's s_x, s_y) NaN.
+    """
+    n = len(telemetry['omega_raw'])
+    named = {'theta_d': 'psi_d', 'theta_e': 'psi_e'}
+    named |= {'x_e': 'e_x', 'y_e': 'e_y'} if 'e_x' in telemetry else {}
+    signals = {mine: telemetry[theirs] for mine, theirs in named.items()}
+    missing = {name: np.full(n, np.nan) for name in ('x_e', 'y_e', 's_x', 's_y')
+               if name not in telemetry and name not in signals}
+    return {**telemetry, **signals, **missing}
+
+
+def file_tasks(names, run: FileRun, start: tuple, plant: str = 'pybullet',
+               sensing: str | None = None, steering: str | None = None) -> list[tuple]:
+    """
+    Return a run of every law of ``names`` as :class:`FileRun` ``run`` makes it.
+
+    As :func:`path_tasks`: the key is ``("path", start, controller)``, ``start`` the
+    reference's start pose.
+    """
+    key = ','.join(f'{round(float(v), 9) + 0.0:.6g}' for v in start)
+    return [(('path', key, name), name, None, run, plant, sensing, steering) for name in names]
+
+
 def run_all(tasks, jobs, progress=None) -> tuple[dict, dict]:
     """
     Run ``tasks`` on ``jobs`` processes (their stdout silenced), or a Dask cluster.
@@ -112,9 +180,13 @@ def run_all(tasks, jobs, progress=None) -> tuple[dict, dict]:
 def _run_task(task: tuple) -> tuple:
     """Run one task in a worker (:func:`comparison_tasks`) -> (key, metrics, series)."""
     key, name, block, scenario, plant, sensing, steering = task
-    result = run_scenario(name, block, scenario, plant, sensing, steering)
-    pulses = [p.start for p in scenario.disturbance.pulses]
-    goal = getattr(scenario.trajectory, 'end_pose', None)  # a path's last pose
+    if isinstance(scenario, FileRun):
+        result, goal = scenario.run(name, plant, sensing, steering)
+        pulses = []
+    else:
+        result = run_scenario(name, block, scenario, plant, sensing, steering)
+        pulses = [p.start for p in scenario.disturbance.pulses]
+        goal = getattr(scenario.trajectory, 'end_pose', None)  # a path's last pose
     metrics = run_metrics(result, InputLimits().omega_max, pulses,
                           HOLD_FROM if goal is None else PATH_HOLD_FROM, goal)
     return key, metrics, _plot_series(result)

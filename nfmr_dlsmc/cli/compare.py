@@ -31,13 +31,15 @@ from nfmr_dlsmc.analysis.comparison_runs import (
     checked_gain_blocks,
     comparison_tasks,
     DECIMATION,
+    file_tasks,
+    FileRun,
     path_tasks,
     results_document,
     run_all,
 )
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, PLANTS
 from nfmr_dlsmc.analysis.evaluation import PATH_MARGIN
-from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES
+from nfmr_dlsmc.baselines.registry import CONTROLLER_NAMES, FREE_ICR_CONTROLLERS
 from nfmr_dlsmc.cli.common import (
     add_steering,
     add_workers,
@@ -88,12 +90,16 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--params', type=Path, default=None, metavar='FILE.yaml',
                         help='with --path: the parameter file whose trajectory.path.* times '
                              'the path and whose arrival.* stops every law (default '
-                             'config/robot_case1.yaml)')
+                             'config/robot_case1.yaml); a file with motion: free_icr compares '
+                             'the free-ICR laws (dlsmc, free_icr_pd) along its path or '
+                             '--path, each run as nfmr-eval runs it with that file')
     parser.add_argument('--gains', type=Path, default=None,
                         help='comparison gains file (default config/comparison.yaml)')
-    parser.add_argument('--controllers', nargs='+', choices=CONTROLLER_NAMES, default=None,
+    parser.add_argument('--controllers', nargs='+',
+                        choices=CONTROLLER_NAMES + FREE_ICR_CONTROLLERS, default=None,
                         help='the laws that run (default: every one, the DLSMC always; '
-                             f"with --matrix: {' '.join(MATRIX_LAWS)})")
+                             f"with --matrix: {' '.join(MATRIX_LAWS)}; with a free-ICR "
+                             f"--params: dlsmc {' '.join(FREE_ICR_CONTROLLERS)})")
     parser.add_argument('--matrix', action='store_true',
                         help='with --plant pybullet: Case 1 and the lemniscate for every '
                              'steering preset and the sensing presets good and harsh '
@@ -114,10 +120,19 @@ def _run(args) -> int:
     from nfmr_dlsmc.analysis.comparison_report import write_path_report, write_report
 
     gains_path = args.gains or shipped_config('comparison.yaml')
+    flat = None if args.params is None else load_params_file(args.params)
+    free_icr = flat is not None and flat.get('motion') == 'free_icr'
     if args.matrix:
         _check_matrix(args)
-    names = (_matrix_laws(args) if args.matrix
-             else list(dict.fromkeys(['dlsmc', *(args.controllers or CONTROLLER_NAMES)])))
+    if free_icr:
+        names = _free_icr_laws(args)
+    else:
+        names = (_matrix_laws(args) if args.matrix
+                 else list(dict.fromkeys(['dlsmc', *(args.controllers or CONTROLLER_NAMES)])))
+        free = [n for n in names if n in FREE_ICR_CONTROLLERS]
+        if free:
+            raise UsageError(f"--controllers {' '.join(free)}: needs motion: free_icr in "
+                             '--params (e.g. config/robot_free_icr.yaml)')
     blocks = checked_gain_blocks(gains_path, names)
     check_writable(args.out, '--out', directory=True)  # after the checks, before the runs
     if args.sensing is not None and args.plant != 'pybullet':
@@ -126,11 +141,13 @@ def _run(args) -> int:
     if args.steering is not None and args.plant != 'pybullet':
         raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
                          'steer motors')
-    if args.params is not None and args.path is None:
+    if args.params is not None and args.path is None and not free_icr:
         raise UsageError('--params times a path: give --path too')
     reference = None
-    if args.path is not None:
-        flat = load_params_file(args.params or shipped_config('robot_case1.yaml'))
+    if free_icr:
+        reference, tasks = _free_icr_tasks(args, flat, gains_path, names)
+    elif args.path is not None:
+        flat = flat if flat is not None else load_params_file(shipped_config('robot_case1.yaml'))
         flat |= path_values(path_file(str(args.path)))
         params = controller_params(flat)
         reference = params.trajectory
@@ -183,6 +200,8 @@ def _run(args) -> int:
         return _write_matrix(args, metrics, names, gains_path, time.perf_counter() - begin,
                              where)
     document = results_document(metrics, args.plant, args.sensing, args.steering)
+    if free_icr:
+        document |= {'motion': 'free_icr', 'params': str(args.params)}
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
     if reference is None:
         figures = write_figures(args.out, series, names, args.plant)
@@ -216,6 +235,44 @@ def _write_partial(args, lost: SchedulerLost, asked: int) -> None:
 def _matrix_laws(args) -> list:
     """Return the laws of ``--matrix``: those of ``--controllers``, else the matrix's four."""
     return list(args.controllers or MATRIX_LAWS)
+
+
+def _free_icr_laws(args) -> list[str]:
+    """Return the laws of the free-ICR comparison; refuse, in one line, what does not apply."""
+    if args.matrix:
+        raise UsageError('--matrix compares the unicycle laws on Case 1 and the lemniscate: '
+                         'not with a free-ICR --params file')
+    if args.plant != 'pybullet':
+        raise UsageError('a free-ICR --params file is compared on the chassis, whose wheels '
+                         'its mapping drives: give --plant pybullet')
+    names = list(dict.fromkeys(['dlsmc', *(args.controllers or FREE_ICR_CONTROLLERS)]))
+    unicycle = [n for n in names if n != 'dlsmc' and n not in FREE_ICR_CONTROLLERS]
+    if unicycle:
+        laws = ' '.join(FREE_ICR_CONTROLLERS)
+        raise UsageError(f"--controllers {' '.join(unicycle)}: a unicycle law, not for a "
+                         f'free-ICR --params file (its laws: dlsmc {laws})')
+    return names
+
+
+def _free_icr_tasks(args, flat: dict, gains_path, names) -> tuple:
+    """Return (the path followed, the runs) of the free-ICR comparison: nfmr-eval's runs."""
+    if args.path is not None:
+        flat = flat | path_values(path_file(str(args.path)))
+    params = controller_params(flat)
+    reference = params.trajectory
+    if not hasattr(reference, 'end_pose'):
+        raise UsageError(f'--params {args.params}: its reference is trajectory.name '
+                         f"{flat.get('trajectory.name')!r}; the free-ICR comparison follows a "
+                         'path: give --path FILE (nfmr-eval runs the built-in trajectories)')
+    given = args.path
+    if given is None:  # the file's own path, for the report
+        args.path = path_file(flat['trajectory.path.file'])
+    if args.duration is None:
+        args.duration = round(reference.duration + PATH_MARGIN, 1)
+    run = FileRun(str(args.params), None if given is None else str(given), str(gains_path),
+                  args.duration, params.dlsmc.dt)
+    return reference, file_tasks(names, run, reference.start_pose, args.plant, args.sensing,
+                                 args.steering)
 
 
 def _check_matrix(args) -> None:

@@ -402,12 +402,12 @@ def simulation_metrics(result, hold_from: float = HOLD_FROM, goal=None,
     With its saturation flags, commanded steer angles and measured steer joint rates where
     the controller and the plant have them, and with ``goal`` (a path's last pose) and
     ``path_end`` (its duration [s]) the arrival figures of a controller that reports
-    ``arrival``. A free-ICR law's telemetry has ``psi_d`` instead of ``theta_d``: the
-    heading figures (theta_e, theta_r) are then of psi - psi_d, the goal's heading the
-    last psi_d.
+    ``arrival``. A free-ICR law's telemetry has ``psi_d`` (perhaps also under the name
+    ``theta_d``, as nfmr-compare reads it): the heading figures (theta_e, theta_r) are then
+    of psi - psi_d, the goal's heading the last psi_d.
     """
     telemetry = result.telemetry
-    if 'psi_d' in telemetry and 'theta_d' not in telemetry:  # free-ICR: its own heading
+    if 'psi_d' in telemetry:  # free-ICR: its own heading
         theta_d = theta_r = telemetry['psi_d']
         if goal is not None:
             goal = (goal[0], goal[1], float(theta_d[-1]))
