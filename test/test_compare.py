@@ -423,6 +423,7 @@ def test_a_free_icr_file_without_a_path_is_refused_naming_its_trajectory(capsys,
         'path' in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.sim
 def test_the_free_icr_comparison_runs_each_law_as_nfmr_eval_does(tmp_path):
     """Both laws along the docking path for 6 s; the DLSMC's figures are nfmr-eval's."""

@@ -281,11 +281,38 @@ def test_a_run_s_note_only_in_the_free_icr_mode():
     flat = load_params_file('config/robot_free_icr.yaml')
     lemniscate = flat | {'trajectory.name': 'lemniscate'}
     facing_x = lemniscate | {'heading.yaw': 0.0}
-    assert 'to unwind by pi (at t = 24.0, 55.4 s)' in run_note(controller_params(facing_x),
-                                                               60.0)
+    note = run_note(controller_params(facing_x), 60.0)
+    assert 'to unwind by pi (at t = 24.0, 55.4 s)' in note
+    assert note.endswith('a fixed heading of 0.79 to 2.36 rad (or that plus pi), not 0.00, '
+                         'needs none')
+    # Heading along the motion: the wheels stand still in the body frame; the heading is
+    # not fixed, so no heading is offered (a circle facing its centre: always unwinding).
+    toward = controller_params(flat | {'trajectory.name': 'circle', 'heading.rule': 'toward',
+                                       'heading.toward_x': 0.0, 'heading.toward_y': 3.0})
+    assert run_note(toward, 60.0) is None
+    spinning = controller_params(flat | {'trajectory.name': 'circle'})  # fixed: it sweeps
+    assert run_note(spinning, 60.0).endswith('no fixed heading avoids it')
     assert flat['heading.yaw'] == PI / 2  # the file's: none
     assert run_note(controller_params(lemniscate), 60.0) is None
     assert run_note(controller_params(lemniscate | {
         'motion': 'nonholonomic', 'steering.j1': 0.0, 'steering.j2': 1.0}), 60.0) is None
     # The docking path: no stop, over its own duration.
     assert run_note(controller_params(flat)) is None
+
+
+def test_each_drive_segment_must_fit_on_its_own_branch():
+    """
+    Two drive segments with a stand between, joints of +-pi / 2 (eq. B3 for each).
+
+    Directions 0 to 1 rad fit for psi in [-0.57, 1.57] (mod pi), 2 to 3 rad for
+    [1.43, 3.57]: both for [-0.57, 0.43] and [1.43, 1.57] (mod pi); the note names the
+    first. As one segment (no stand) they sweep 3 rad of the range's 3.14: only
+    [1.43, 1.57].
+    """
+    first, second = np.linspace(0.0, 1.0, 20), np.linspace(2.0, 3.0, 20)
+    apart = unwind_note([1.0], np.concatenate([first, [np.nan], second]), 2.0, PI / 2)
+    together = unwind_note([1.0], np.concatenate([first, second]), 2.0, PI / 2)
+    for note, (low, high) in ((apart, (-0.571, 0.429)), (together, (1.429, 1.571))):
+        start, end = (float(v) for v in re.search(r'heading of (\S+) to (\S+) rad',
+                                                  note).groups())
+        assert start == pytest.approx(low, abs=0.015) and end == pytest.approx(high, abs=0.015)
