@@ -81,6 +81,36 @@ def test_a_heading_that_asks_for_more_than_omega_max_is_refused():
                      'heading.rule': 'fixed'}).heading.rule == 'fixed'
 
 
+def test_a_refused_heading_names_the_rule_or_the_path_s_column_and_the_first_time():
+    lemniscate = make_trajectory('lemniscate')
+    with pytest.raises(ParameterError) as near:
+        check_heading_rate(lemniscate, HeadingConfig(rule='toward', toward_x=0.5,
+                                                     toward_y=0.4), 1.59, 70.0)
+    error = near.value
+    assert (error.parameter, error.value, error.unit) == ('heading.rule', 'toward', '')
+    # Its nearest pass, found by brute force: the distance printed is that minimum.
+    times = np.arange(0.0, 70.01, 0.01)
+    x_d, y_d = lemniscate.sample(times)[:2]
+    gap = np.hypot(0.5 - x_d, 0.4 - y_d)
+    assert f'passes {gap.min():.3f} m from the point' in error.rule
+    assert f'at t = {times[np.argmin(gap)]:.2f} s' in error.rule
+    # The tangent rule's rate first exceeds 0.2 rad/s at the time the message names.
+    rates = np.array([heading_reference(lemniscate, HeadingConfig(), t)[1] for t in times])
+    first = int(np.flatnonzero(np.abs(rates) > 0.2)[0])
+    with pytest.raises(ParameterError) as fast:
+        check_heading_rate(lemniscate, HeadingConfig(), 0.2, 70.0)
+    assert (fast.value.parameter, fast.value.value, fast.value.unit) == (
+        'heading.rule', 'tangent', 'rad/s')
+    assert (f'yaw rate of {rates[first]:.3g} rad/s at t = {times[first]:.2f} s'
+            in fast.value.rule)
+    # A path's own heading column is named as such, whatever the rule.
+    turning = PathTrajectory.from_points([(0.0, 0.0), (1.0, 0.0)], yaw=[0.0, 1.0])
+    with pytest.raises(ParameterError) as column:
+        check_heading_rate(turning, HeadingConfig(rule='fixed'), 0.01, turning.duration)
+    assert (column.value.parameter, column.value.value) == (
+        'trajectory.path.file', 'its heading column')
+
+
 # -- heading rules ---------------------------------------------------------------------------
 
 

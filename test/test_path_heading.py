@@ -5,6 +5,7 @@ import pickle
 
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
+from nfmr_dlsmc.core.heading_reference import heading_reference, heading_samples, HeadingConfig
 from nfmr_dlsmc.core.path_heading import flat_ended_curve, heading_bounds, spin_curve, unwrapped
 from nfmr_dlsmc.core.path_reference import (
     MAX_YAW,
@@ -333,3 +334,39 @@ def test_any_yawed_path_keeps_its_heading_within_the_limits(rows, omega_max, alp
     psi, rate = traj.yaw_reference(t)
     assert np.all(np.isfinite(psi)) and np.abs(rate).max() <= omega_max * (1.0 + 1e-9)
     assert np.abs(np.diff(rate)).max() <= alpha * (t[1] - t[0]) * 1.05 + 1e-9
+
+
+# -- the heading reference for many times at once ------------------------------------------------
+
+
+def _references():
+    from nfmr_dlsmc.core.trajectories import make_trajectory
+    turning = PathTrajectory.from_points([(0.0, 0.0), (0.0, 0.0), (1.0, 0.5), (2.0, 0.0)],
+                                         yaw=[0.0, 1.0, 1.2, 0.4])
+    plain = PathTrajectory.from_points([(0.0, 0.0), (1.0, 0.5), (2.0, 0.0)])
+    return {'lemniscate': make_trajectory('lemniscate'), 'sine': make_trajectory('sine'),
+            'path with yaw': turning, 'path': plain}
+
+
+@pytest.mark.parametrize('rule', [
+    HeadingConfig(), HeadingConfig(rule='fixed', yaw=-0.7),
+    HeadingConfig(rule='toward', toward_x=6.0, toward_y=-4.0)], ids=['tangent', 'fixed', 'toward'])
+@pytest.mark.parametrize('name', ['lemniscate', 'sine', 'path with yaw', 'path'])
+def test_the_samples_are_the_heading_reference_at_each_time(rule, name):
+    """heading_samples is heading_reference for an array: before, along and after a path."""
+    trajectory = _references()[name]
+    end = getattr(trajectory, 'duration', 30.0)
+    times = np.concatenate([[-1.0, 0.0], np.linspace(0.0, end, 97), [end + 2.0]])
+    psi, rate = heading_samples(trajectory, rule, times)
+    expected = np.array([heading_reference(trajectory, rule, float(t)) for t in times])
+    assert psi == pytest.approx(expected[:, 0], abs=1e-12)
+    assert rate == pytest.approx(expected[:, 1], abs=1e-12)
+    assert psi.dtype == float and rate.shape == times.shape
+
+
+def test_a_path_at_rest_keeps_its_own_tangent_in_the_samples():
+    """Tangent rule at the ends of a path, where it rests: its last tangent, rate 0."""
+    path = _references()['path']
+    psi, rate = heading_samples(path, HeadingConfig(), np.array([0.0, path.duration + 1.0]))
+    assert psi == pytest.approx([path.heading(0.0), path.heading(path.duration)])
+    assert np.all(rate == 0.0) and abs(psi[1]) > 0.1  # it ends heading down, not 0

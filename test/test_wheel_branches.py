@@ -316,3 +316,23 @@ def test_each_drive_segment_must_fit_on_its_own_branch():
         start, end = (float(v) for v in re.search(r'heading of (\S+) to (\S+) rad',
                                                   note).groups())
         assert start == pytest.approx(low, abs=0.015) and end == pytest.approx(high, abs=0.015)
+
+
+def test_turning_about_the_centre_each_wheel_is_carried_along_its_own_tangent():
+    """A spin: every wheel's anchor is perpendicular to its radius, planned and carried."""
+    plan = _plan()
+    positions = GEOMETRY.wheel_positions
+
+    def spin(omega, vx=0.0):
+        def ahead(offsets):
+            return (np.full(offsets.shape, vx), np.zeros(offsets.shape),
+                    np.full(offsets.shape, omega))
+        return (vx, 0.0, omega), ahead
+
+    for twist, ahead in (spin(1.0), spin(1.0, 0.05), spin(0.8, 0.1)):
+        anchors = np.array(plan.anchors(twist, [0.0] * 4, ahead))
+        vx, vy, omega = twist
+        wheel = np.arctan2(vy + omega * positions[:, 0], vx - omega * positions[:, 1])
+        assert np.mod(anchors - wheel + 0.5 * PI, PI) - 0.5 * PI == pytest.approx(
+            np.zeros(4), abs=1e-12)
+    assert plan.plans == 1  # planned once, then carried with each wheel's own direction

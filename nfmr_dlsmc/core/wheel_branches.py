@@ -55,8 +55,9 @@ __all__ = ['BranchPlan', 'PLAN_STEP', 'branch_anchors', 'reference_twists',
            'reference_unwind_note', 'reference_wheel_directions', 'unwind_note',
            'unwind_times']
 
-#: Sampling step [s] of the reference ahead: a wheel direction turns by at most
-#: omega_max-order rates, far below pi / 2 in 0.1 s.
+#: Sampling step [s] of the reference ahead: away from the ICR a wheel's direction turns
+#: at rates of the order of omega_max, far below pi / 2 in 0.1 s (near it the wheel is
+#: slow and stands).
 PLAN_STEP = 0.1
 
 
