@@ -14,8 +14,8 @@ from nfmr_dlsmc.core.steering import RobotGeometry
 from nfmr_dlsmc.core.swerve_kinematics import swerve_commands, SwerveConfig
 from nfmr_dlsmc.core.trajectories import Lemniscate
 from nfmr_dlsmc.core.wheel_branches import (
-    branch_anchors, BranchPlan, PLAN_STEP, reference_twists, reference_wheel_directions,
-    unwind_note, unwind_times)
+    body_twist, branch_anchors, BranchPlan, PLAN_STEP, reference_twists,
+    reference_wheel_directions, unwind_note, unwind_times)
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 from nfmr_dlsmc.runtime.tracking_session import TrackingSession, unwind_note as run_note
 import numpy as np
@@ -31,6 +31,17 @@ def _same(directions):
 
 
 # -- directions ------------------------------------------------------------------------------
+
+
+def test_a_velocity_turned_into_the_body_frame_keeps_its_speed_and_loses_the_heading():
+    psi = np.array([-2.5, 0.0, 0.7, PI])
+    xdot, ydot = 0.3 * np.ones(4), -0.4 * np.ones(4)
+    vx, vy, omega = body_twist(xdot, ydot, psi, 0.25)
+    assert np.allclose(np.hypot(vx, vy), 0.5)
+    assert np.allclose(np.angle(np.exp(1j * (np.arctan2(vy, vx) + psi))),
+                       math.atan2(-0.4, 0.3))
+    assert omega == 0.25
+    assert body_twist(1.0, 0.0, PI / 2, 0.0)[:2] == pytest.approx((0.0, -1.0))
 
 
 def test_a_crab_points_every_wheel_one_way_and_a_spin_around_the_centre():

@@ -51,7 +51,7 @@ from typing import Callable
 from nfmr_dlsmc.core.heading_reference import heading_samples
 import numpy as np
 
-__all__ = ['BranchPlan', 'PLAN_STEP', 'branch_anchors', 'reference_twists',
+__all__ = ['BranchPlan', 'PLAN_STEP', 'body_twist', 'branch_anchors', 'reference_twists',
            'reference_unwind_note', 'reference_wheel_directions', 'unwind_note',
            'unwind_times']
 
@@ -59,6 +59,18 @@ __all__ = ['BranchPlan', 'PLAN_STEP', 'branch_anchors', 'reference_twists',
 #: at rates of the order of omega_max, far below pi / 2 in 0.1 s (near it the wheel is
 #: slow and stands).
 PLAN_STEP = 0.1
+
+
+def body_twist(xdot, ydot, psi, rate) -> tuple:
+    """
+    Return a world-frame velocity turned into the body frame of heading ``psi``.
+
+    (x', y') [m/s] and the heading ``psi`` [rad] (floats or arrays) -> (v_x, v_y, omega)
+    with v_x = cos psi x' + sin psi y', v_y = cos psi y' - sin psi x' and omega = ``rate``
+    [rad/s] passed through.
+    """
+    cos, sin = np.cos(psi), np.sin(psi)
+    return cos * xdot + sin * ydot, cos * ydot - sin * xdot, rate
 
 
 def reference_twists(trajectory, heading, times) -> tuple:
@@ -72,9 +84,7 @@ def reference_twists(trajectory, heading, times) -> tuple:
     times = np.asarray(times, dtype=float)
     _, _, xdot, ydot = (np.asarray(v, dtype=float) * np.ones(times.shape)
                         for v in trajectory.sample(times))
-    psi, rate = heading_samples(trajectory, heading, times)
-    cos, sin = np.cos(psi), np.sin(psi)
-    return cos * xdot + sin * ydot, cos * ydot - sin * xdot, rate
+    return body_twist(xdot, ydot, *heading_samples(trajectory, heading, times))
 
 
 def reference_wheel_directions(vx, vy, omega, wheel_positions, min_speed: float) -> np.ndarray:
@@ -345,9 +355,8 @@ def reference_unwind_note(trajectory, heading, swerve, wheel_positions,
                          swerve.min_wheel_speed, max(swerve.branch_horizon, PLAN_STEP))
     crab = heading.rule == 'fixed' and not getattr(trajectory, 'has_yaw', False)
     directions = None
-    if crab:
-        _, _, xdot, ydot = (np.asarray(v, dtype=float) * np.ones(times.shape)
-                            for v in trajectory.sample(times))
-        directions = np.where(np.hypot(xdot, ydot) < swerve.min_wheel_speed, np.nan,
-                              np.arctan2(ydot, xdot))
+    if crab:  # the world direction of the velocity: its body direction plus the heading
+        vx, vy = twists[0], twists[1]
+        directions = np.where(np.hypot(vx, vy) < swerve.min_wheel_speed, np.nan,
+                              np.arctan2(vy, vx) + heading.yaw)
     return unwind_note(stops, directions, heading.yaw if crab else None, swerve.steer_limit)

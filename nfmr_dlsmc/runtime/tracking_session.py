@@ -34,7 +34,8 @@ from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
 from nfmr_dlsmc.core.validation import ParameterError
-from nfmr_dlsmc.core.wheel_branches import BranchPlan, reference_twists, reference_unwind_note
+from nfmr_dlsmc.core.wheel_branches import (body_twist, BranchPlan, reference_twists,
+                                            reference_unwind_note)
 from nfmr_dlsmc.core.wheel_odometry import WheelOdometry
 from nfmr_dlsmc.runtime.joint_states import wheel_sample
 from nfmr_dlsmc.runtime.odometry_gate import OdometryGate, OdometryRules
@@ -624,11 +625,9 @@ class TrackingSession:
         """
         if self._branches is None:
             return None
-        c, s = math.cos(psi_d), math.sin(psi_d)
-        xdot_d, ydot_d = reference[2], reference[3]
         trajectory, heading = self.params.trajectory, self.params.heading
         return self._branches.anchors(
-            (c * xdot_d + s * ydot_d, c * ydot_d - s * xdot_d, psidot_d), current,
+            body_twist(reference[2], reference[3], psi_d, psidot_d), current,
             lambda offsets: reference_twists(trajectory, heading, t + offsets))
 
     def _angles_ahead(self, t: float, psi: float, current, near=None) -> np.ndarray:
@@ -647,8 +646,7 @@ class TrackingSession:
         trajectory = self.params.trajectory
         _, _, xdot_d, ydot_d = (float(v) for v in trajectory.sample(t + tau))
         _, psidot_d = heading_reference(trajectory, self.params.heading, t + tau)
-        c, s = math.cos(psi), math.sin(psi)
-        ahead = swerve_commands(c * xdot_d + s * ydot_d, c * ydot_d - s * xdot_d, psidot_d,
+        ahead = swerve_commands(*body_twist(xdot_d, ydot_d, psi, psidot_d),
                                 current, self.params.geometry, self.params.swerve,
                                 hold_steer=self._steer, near=near)
         return ahead.steer
