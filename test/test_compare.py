@@ -444,3 +444,20 @@ def test_the_free_icr_comparison_runs_each_law_as_nfmr_eval_does(tmp_path):
                                                                rel=1e-9)
     for run in runs.values():  # of psi - psi_d: the docking run faces +x all along
         assert run['hold_theta_e_p99'] < 1e-3
+
+
+@pytest.mark.sim  # refused before a step, but --plant pybullet
+@pytest.mark.parametrize('argv, message', [
+    (['--odom-seed', '2'], '--odom-seed seeds the noise of a noisy odometry: give --sensing '
+                           '(or --matrix)'),
+    (['--odom-seed', '-1', '--plant', 'pybullet', '--sensing', 'harsh'],
+     '--odom-seed -1: must be >= 0'),
+    (['--odom-seed', '1', '--plant', 'pybullet', '--params', FREE_ICR_FILE],
+     '--odom-seed does not apply to a free-ICR --params file'),
+])
+def test_an_odometry_seed_without_noisy_odometry_is_refused_in_one_line(
+        capsys, tmp_path, argv, message):
+    out = tmp_path / 'report'
+    assert compare_cli.main(['--out', str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and not out.exists()

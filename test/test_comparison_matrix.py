@@ -16,6 +16,7 @@ from nfmr_dlsmc.analysis.evaluation import evaluate, load_evaluation
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.cli import compare as compare_cli
 from nfmr_dlsmc.core.metrics import HOLD_FROM
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS
 from nfmr_dlsmc.plants.kinematic import SimResult
 from nfmr_dlsmc.runtime.params import load_gain_blocks
@@ -43,13 +44,17 @@ def test_the_matrix_runs_every_reference_cell_and_law_the_robot_profile_declarin
         assert scenario.duration == 40.0 and scenario.disturbance.pulses == ()
         assert scenario.x0 == {'case1': (1.0, 4.0, 0.0), 'lemniscate': (1.0, -1.0, 0.5)}[
             reference]
-        preset = STEERING_PRESETS[steering]
+        preset, odometry = STEERING_PRESETS[steering], SENSING_PRESETS[sensing]
         if name == 'dlsmc_robot':
             config = build_controller(name, block).config
             assert config.steer_lag == preset['motors.steer_lag']
             assert config.steer_rate_limit == preset['motors.steer_rate_limit']
+            assert config.odom_position_noise == odometry['disturbance.odom_position_noise']
+            assert config.odom_yaw_noise == odometry['disturbance.odom_yaw_noise']
             assert block == {**blocks[name], 'steer_lag': config.steer_lag,
-                             'steer_rate_limit': config.steer_rate_limit}
+                             'steer_rate_limit': config.steer_rate_limit,
+                             'odom_position_noise': config.odom_position_noise,
+                             'odom_yaw_noise': config.odom_yaw_noise}
         else:
             assert block is blocks[name]
     assert {task[1] for task in tasks} == set(MATRIX_LAWS)
@@ -94,13 +99,13 @@ def _document() -> dict:
     figures['slow/good']['stanley'] = _run(1.37, saturated=0.3, joint_p99=2.0, t_conv=None)
     metrics = {('case1', cell, law): values for cell, runs in figures.items()
                for law, values in runs.items()}
-    return matrix_document(metrics, laws, 40.0)
+    return matrix_document(metrics, laws, 40.0, odom_seed=3)
 
 
 def test_the_document_holds_every_run_by_reference_cell_and_law():
     document = _document()
     assert document['laws'] == ['dlsmc_robot', 'stanley'] and document['duration'] == 40.0
-    assert document['hold_from'] == HOLD_FROM
+    assert document['hold_from'] == HOLD_FROM and document['odom_seed'] == 3
     assert document['references']['lemniscate'] == {'trajectory': 'lemniscate',
                                                     'x0': [1.0, -1.0, 0.5]}
     assert document['cells']['slow/harsh'] == {'steering': 'slow', 'sensing': 'harsh',

@@ -6,11 +6,13 @@ Case 1 from (1, 4, 0) and the lemniscate from (1, -1, 0.5), each for every steer
 ``good`` and ``harsh`` (:data:`~nfmr_dlsmc.core.sensing.SENSING_PRESETS`), for the robot
 profile of the DLSMC, Stanley, Kanayama and pure pursuit, on the pybullet chassis. The robot
 profile declares each cell's steering (its ``steer_lag`` and ``steer_rate_limit`` are the
-preset's), and every law sees the pose through the robot profile's estimator
-(:func:`~nfmr_dlsmc.analysis.comparison_scenarios.run_scenario` with a sensing preset).
-The runs are those of :func:`~nfmr_dlsmc.analysis.comparison_runs.run_all`; what they
-measured goes into ``matrix.json``, its tables (:func:`matrix_tables`) into ``matrix.md``
-and a heat map per law into ``matrix.png``.
+preset's) and odometry noise (its ``odom_position_noise`` and ``odom_yaw_noise`` are the
+sensing preset's, doc/design.md D39), and every law sees the pose through the robot
+profile's estimator (:func:`~nfmr_dlsmc.analysis.comparison_scenarios.run_scenario`
+with a sensing preset). The runs are those of
+:func:`~nfmr_dlsmc.analysis.comparison_runs.run_all`; what they measured goes into
+``matrix.json``, its tables (:func:`matrix_tables`) into ``matrix.md`` and a heat map per
+law into ``matrix.png``.
 """
 
 from dataclasses import replace
@@ -19,13 +21,15 @@ from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, Scenari
 from nfmr_dlsmc.baselines.registry import controller_label
 from nfmr_dlsmc.core.disturbances import YawRateDisturbance
 from nfmr_dlsmc.core.metrics import COARSE_TOLERANCE, HOLD_FROM
+from nfmr_dlsmc.core.sensing import SENSING_PRESETS
 from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS
 from nfmr_dlsmc.core.trajectories import make_trajectory
 
 #: The laws of the matrix, in its columns: the robot profile first.
 MATRIX_LAWS = ('dlsmc_robot', 'stanley', 'kanayama', 'pure_pursuit')
-#: The laws that declare each cell's steering (their blocks take ``steer_lag`` and
-#: ``steer_rate_limit``): the robot profile. The paper's DLSMC stays the paper's law.
+#: The laws that declare each cell's steering and odometry noise (their blocks take
+#: ``steer_lag``, ``steer_rate_limit``, ``odom_position_noise`` and ``odom_yaw_noise``):
+#: the robot profile. The paper's DLSMC stays the paper's law.
 DECLARING_LAWS = ('dlsmc_robot',)
 #: The steering presets (rows, outer) and sensing presets (rows, inner) of the matrix.
 MATRIX_STEERING = tuple(STEERING_PRESETS)
@@ -69,19 +73,23 @@ def matrix_cells() -> list[tuple[str, str]]:
     return [(steering, sensing) for steering in MATRIX_STEERING for sensing in MATRIX_SENSING]
 
 
-def declared_block(name: str, block: dict | None, steering: str) -> dict | None:
+def declared_block(name: str, block: dict | None, steering: str, sensing: str) -> dict | None:
     """
-    Return law ``name``'s gain block for a cell of steering preset ``steering``.
+    Return law ``name``'s gain block for a cell of presets ``steering`` and ``sensing``.
 
-    A law of :data:`DECLARING_LAWS` gets the preset's ``motors.steer_lag`` as its
+    A law of :data:`DECLARING_LAWS` gets the steering preset's ``motors.steer_lag`` as its
     ``steer_lag`` [s] and ``motors.steer_rate_limit`` as its ``steer_rate_limit`` [rad/s]
-    (doc/steering.md); the other laws' blocks are returned as they are.
+    (doc/steering.md), and the sensing preset's ``disturbance.odom_position_noise`` [m] and
+    ``disturbance.odom_yaw_noise`` [rad] as its ``odom_position_noise`` and
+    ``odom_yaw_noise`` (doc/design.md, D39); the other laws' blocks are returned as they are.
     """
     if name not in DECLARING_LAWS:
         return block
-    preset = STEERING_PRESETS[steering]
-    return {**(block or {}), 'steer_lag': preset['motors.steer_lag'],
-            'steer_rate_limit': preset['motors.steer_rate_limit']}
+    motors, odometry = STEERING_PRESETS[steering], SENSING_PRESETS[sensing]
+    return {**(block or {}), 'steer_lag': motors['motors.steer_lag'],
+            'steer_rate_limit': motors['motors.steer_rate_limit'],
+            'odom_position_noise': odometry['disturbance.odom_position_noise'],
+            'odom_yaw_noise': odometry['disturbance.odom_yaw_noise']}
 
 
 def matrix_tasks(blocks: dict, duration: float = MATRIX_DURATION,
@@ -98,16 +106,17 @@ def matrix_tasks(blocks: dict, duration: float = MATRIX_DURATION,
         scenario = replace(scenario, duration=duration)
         for steering, sensing in matrix_cells():
             tasks += [((key, cell_name(steering, sensing), name), name,
-                       declared_block(name, blocks.get(name), steering), scenario,
+                       declared_block(name, blocks.get(name), steering, sensing), scenario,
                        'pybullet', sensing, steering) for name in laws]
     return tasks
 
 
-def matrix_document(metrics: dict, laws, duration: float) -> dict:
+def matrix_document(metrics: dict, laws, duration: float, odom_seed: int = 0) -> dict:
     """
     Return ``matrix.json``'s document of the runs' ``metrics`` (by task key).
 
     ``"laws"`` -> ``laws`` in column order; ``"duration"`` [s] and ``"hold_from"`` [s];
+    ``"odom_seed"`` -> the seed of the odometry's noise;
     ``"references"`` -> reference -> its trajectory and start pose; ``"cells"`` -> cell ->
     its steering and sensing presets and the steering's ``steer_lag`` [s] and
     ``steer_rate_limit`` [rad/s]; ``"runs"`` -> reference -> cell -> law -> every number
@@ -128,7 +137,8 @@ def matrix_document(metrics: dict, laws, duration: float) -> dict:
                     runs.setdefault(reference, {}).setdefault(cell, {})[name] = metrics[
                         (reference, cell, name)]
     return {'plant': 'pybullet', 'laws': list(laws), 'duration': duration,
-            'hold_from': HOLD_FROM, 'references': references, 'cells': cells, 'runs': runs}
+            'hold_from': HOLD_FROM, 'odom_seed': odom_seed, 'references': references,
+            'cells': cells, 'runs': runs}
 
 
 def run_marks(figures: dict, rate_limit: float) -> tuple[str, ...]:
@@ -236,7 +246,8 @@ def matrix_report(document: dict, gains: str, elapsed: float, where: str) -> str
         f"{runs} runs of {document['duration']:g} s ({elapsed:.0f} s on {where}): every "
         'reference, steering preset and sensing preset for '
         f"{', '.join(controller_label(n) for n in document['laws'])}, their gains from "
-        f'{gains}. The robot profile declares the steering of each row (`steer_lag`, '
-        "`steer_rate_limit`: the preset's); every law sees the pose through the robot "
-        "profile's estimator. `matrix.json` has every number of every run, `matrix.png` "
-        'the heat maps.\n\n' + matrix_tables(document))
+        f'{gains}. The robot profile declares the steering and the odometry noise of each '
+        'row (`steer_lag`, `steer_rate_limit`, `odom_position_noise`, `odom_yaw_noise`: the '
+        "presets'); every law sees the pose through the robot profile's estimator, the "
+        f"odometry's noise drawn with seed {document['odom_seed']}. `matrix.json` has "
+        'every number of every run, `matrix.png` the heat maps.\n\n' + matrix_tables(document))

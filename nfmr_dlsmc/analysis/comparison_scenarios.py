@@ -56,6 +56,9 @@ class Scenario:
     arrival : ArrivalConfig or None
         With a reference that ends (a path), when a controller has arrived and stops
         (:func:`~nfmr_dlsmc.core.arrival.with_arrival`), the same rule for every law.
+    odom_seed : int
+        With a sensing preset: the seed of the odometry's noise and bias walk (the sim's
+        ``disturbance.seed``); one draw of a noisy odometry, the same for every law.
 
     """
 
@@ -66,6 +69,7 @@ class Scenario:
     dt: float = 0.001
     trajectory: object = None
     arrival: ArrivalConfig | None = None
+    odom_seed: int = 0
 
     @property
     def start_key(self) -> str:
@@ -116,7 +120,8 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
     law = build_controller(name, block, dt=scenario.dt)
     if plant == 'pybullet':
         plant_ = robot_plant('pybullet')
-        flat = {} if sensing is None else with_sensing({}, sensing)
+        flat = {} if sensing is None else with_sensing({}, sensing) | {
+            'disturbance.seed': scenario.odom_seed}
         settings = plant_.settings(flat if steering is None else with_steering(flat, steering))
         params = ControllerParams(
             dlsmc=DlsmcConfig(dt=scenario.dt), trajectory=trajectory, arrival=scenario.arrival,

@@ -15,6 +15,7 @@ instead (:mod:`nfmr_dlsmc.analysis.comparison_matrix`): ``matrix.json``, ``matri
 """
 
 import argparse
+from dataclasses import replace
 import json
 from pathlib import Path
 import sys
@@ -79,6 +80,10 @@ def _parser() -> argparse.ArgumentParser:
                              'from a preset, every law seeing the pose through the robot '
                              "profile's estimator (default: ideal, the ground truth)")
     add_steering(parser)
+    parser.add_argument('--odom-seed', type=int, default=0, metavar='N',
+                        help="with --sensing or --matrix: the seed of the odometry's noise "
+                             'and bias walk, the same draw for every law (default 0); other '
+                             'seeds are other draws of the same odometry')
     parser.add_argument('--duration', type=positive_number, default=None,
                         help="length of every run [s] (default 100, the paper's; with "
                              "--path the path's duration and 5 s; shorter for a quick look: "
@@ -141,6 +146,8 @@ def _run(args) -> int:
     if args.steering is not None and args.plant != 'pybullet':
         raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
                          'steer motors')
+    if args.odom_seed != 0:
+        _check_odom_seed(args, free_icr)
     if args.params is not None and args.path is None and not free_icr:
         raise UsageError('--params times a path: give --path too')
     reference = None
@@ -164,6 +171,9 @@ def _run(args) -> int:
             args.duration = CASE1_LONGITUDINAL.duration
         tasks = comparison_tasks(names, blocks, args.plant, args.duration, args.sensing,
                                  args.steering)
+    if args.odom_seed != 0:
+        tasks = [(*task[:3], replace(task[3], odom_seed=args.odom_seed), *task[4:])
+                 for task in tasks]
     with workers(args) as where:
         # Its figures show a point every DECIMATION steps: at least one.
         check_run_length(args.duration, tasks[0][3].dt,
@@ -200,6 +210,8 @@ def _run(args) -> int:
         return _write_matrix(args, metrics, names, gains_path, time.perf_counter() - begin,
                              where)
     document = results_document(metrics, args.plant, args.sensing, args.steering)
+    if args.sensing is not None and not free_icr:
+        document['odom_seed'] = args.odom_seed
     if free_icr:
         document |= {'motion': 'free_icr', 'params': str(args.params)}
     (args.out / 'results.json').write_text(json.dumps(json_ready(document), indent=1))
@@ -224,7 +236,8 @@ def _write_partial(args, lost: SchedulerLost, asked: int) -> None:
     metrics = lost.partial[0]
     args.out.mkdir(parents=True, exist_ok=True)
     document = {'complete': False, 'runs_finished': len(metrics), 'runs_asked': asked,
-                **(matrix_document(metrics, _matrix_laws(args), args.duration) if args.matrix
+                **(matrix_document(metrics, _matrix_laws(args), args.duration, args.odom_seed)
+                   if args.matrix
                    else results_document(metrics, args.plant, args.sensing, args.steering))}
     path = args.out / ('matrix.json' if args.matrix else 'results.json')
     path.write_text(json.dumps(json_ready(document), indent=1))
@@ -287,11 +300,24 @@ def _check_matrix(args) -> None:
             raise UsageError(f'{option} does not apply to --matrix: {why}')
 
 
+def _check_odom_seed(args, free_icr: bool) -> None:
+    """Refuse, in one line, an ``--odom-seed`` with no noisy odometry to draw, or a bad one."""
+    if args.odom_seed < 0:
+        raise UsageError(f'--odom-seed {args.odom_seed}: must be >= 0')
+    if free_icr:
+        raise UsageError('--odom-seed does not apply to a free-ICR --params file: each run '
+                         "is nfmr-eval's with that file; set disturbance.seed in its sim "
+                         'section')
+    if args.sensing is None and not args.matrix:
+        raise UsageError('--odom-seed seeds the noise of a noisy odometry: give --sensing '
+                         '(or --matrix)')
+
+
 def _write_matrix(args, metrics: dict, laws, gains, elapsed: float, where: str) -> int:
     """Write matrix.json, matrix.md and matrix.png of the matrix's runs into ``--out``."""
     from nfmr_dlsmc.analysis.matrix_figure import write_matrix_figure
 
-    document = matrix_document(metrics, laws, args.duration)
+    document = matrix_document(metrics, laws, args.duration, args.odom_seed)
     (args.out / 'matrix.json').write_text(json.dumps(json_ready(document), indent=1))
     (args.out / 'matrix.md').write_text(matrix_report(document, gains, elapsed, where))
     write_matrix_figure(args.out / 'matrix.png', document)

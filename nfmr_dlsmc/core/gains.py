@@ -228,6 +228,24 @@ class DlsmcConfig:
     steer_rate_zone: float = param(0.6, 'm rad^2/s^2', 'the least linear zone of alpha(e) '
                                    'times the square of the declared steer_rate_limit',
                                    POSITIVE)
+    odom_position_noise: float = param(0.0, 'm', 'robot option: the standard deviation of '
+                                       "the odometry's position noise, as declared; the outer "
+                                       "loop's linear zone is then at least odom_noise_zone "
+                                       'times it, so that the position loop does not turn the '
+                                       'robot after every noisy fix (doc/design.md, D39; 0: '
+                                       'exact odometry, the paper)', NON_NEGATIVE,
+                                       also='< outer.xi / odom_noise_zone')
+    odom_yaw_noise: float = param(0.0, 'rad', 'robot option: the standard deviation of the '
+                                  "odometry's yaw noise, as declared; the inner loop's "
+                                  'barrier half-width eps is then at least odom_noise_eps '
+                                  'times it, so that the heading loop does not answer the '
+                                  'noise with its barrier gain (doc/design.md, D39; 0: exact '
+                                  'odometry, the paper)', NON_NEGATIVE,
+                                  also='< pi / odom_noise_eps')
+    odom_noise_zone: float = param(16.7, '', 'the least linear zone of alpha(e) per metre of '
+                                   'declared odom_position_noise', POSITIVE)
+    odom_noise_eps: float = param(6.67, '', 'the least barrier half-width eps per radian of '
+                                  'declared odom_yaw_noise', POSITIVE)
 
     def __post_init__(self):
         check_fields(self)
@@ -243,6 +261,17 @@ class DlsmcConfig:
                                  f'outer.xi) = '
                                  f'{slowest:g} rad/s: a slower steering would need a linear '
                                  'zone of alpha(e) as wide as its phase boundary', 'rad/s')
+        if self.odom_noise_zone * self.odom_position_noise >= self.outer.xi:
+            raise ParameterError('odom_position_noise', self.odom_position_noise,
+                                 f'must be < outer.xi / odom_noise_zone = '
+                                 f'{self.outer.xi / self.odom_noise_zone:g} m: noisier '
+                                 'odometry would need a linear zone of alpha(e) as wide as its '
+                                 'phase boundary', 'm')
+        if self.odom_noise_eps * self.odom_yaw_noise >= math.pi:
+            raise ParameterError('odom_yaw_noise', self.odom_yaw_noise,
+                                 f'must be < pi / odom_noise_eps = '
+                                 f'{math.pi / self.odom_noise_eps:g} rad: noisier odometry '
+                                 'would need a barrier half-width eps of pi or more', 'rad')
 
     @property
     def robot_options(self) -> dict:
@@ -251,7 +280,9 @@ class DlsmcConfig:
                   'inner.boundary_layer': self.inner.boundary_layer,
                   'inner.eta_max': self.inner.eta_max, 'thetadot_source': self.thetadot_source,
                   'omega_filter': self.omega_filter, 'align_speed': self.align_speed,
-                  'steer_lag': self.steer_lag, 'steer_rate_limit': self.steer_rate_limit}
+                  'steer_lag': self.steer_lag, 'steer_rate_limit': self.steer_rate_limit,
+                  'odom_position_noise': self.odom_position_noise,
+                  'odom_yaw_noise': self.odom_yaw_noise}
         paper = {'thetadot_source': 'difference', 'align_speed': False}
         return {name: value for name, value in values.items()
                 if value != paper.get(name, 0.0)}
@@ -268,27 +299,33 @@ class DlsmcConfig:
 
         The boundary layer phi is at least ``steer_lag_layer`` ``steer_lag``^2 [rad]
         (doc/design.md, D30): the switching term's gain eta_hat / phi then stays below what
-        a steering that lags by ``steer_lag`` [s] follows without a limit cycle.
+        a steering that lags by ``steer_lag`` [s] follows without a limit cycle. The
+        barrier half-width eps of eq. (13) is at least ``odom_noise_eps``
+        ``odom_yaw_noise`` [rad] (D39): the barrier's gain lambda |s| / (eps - |s|) is not
+        raised by the odometry's yaw noise alone.
         """
-        layer = self.steer_lag_layer * self.steer_lag ** 2
-        if layer <= self.inner.boundary_layer:
+        layer = max(self.steer_lag_layer * self.steer_lag ** 2, self.inner.boundary_layer)
+        eps = max(self.odom_noise_eps * self.odom_yaw_noise, self.inner.eps)
+        if layer == self.inner.boundary_layer and eps == self.inner.eps:
             return self.inner
-        return replace(self.inner, boundary_layer=layer)
+        return replace(self.inner, boundary_layer=layer, eps=eps)
 
     @property
     def outer_in_use(self) -> OuterLoopGains:
         """
-        Return the outer loop's gains as the law uses them: with the declared steering.
+        Return the outer loop's gains as the law uses them: with the declared robot.
 
         With a declared ``steer_rate_limit`` [rad/s] the linear zone d of alpha(e) (eq. 33)
         is at least ``steer_rate_zone`` / ``steer_rate_limit``^2 [m] (doc/design.md, D31): the
         position loop's gain near the path, C alpha(d) / d, then falls as the steering
         slows, and the turn it asks for as the robot closes on the path is one the
-        steering makes.
+        steering makes. With a declared ``odom_position_noise`` [m] it is at least
+        ``odom_noise_zone`` times that (D39): a fix's noise then moves the command in
+        proportion, not by the steep terminal part of alpha.
         """
-        if self.steer_rate_limit == 0.0:
-            return self.outer
-        zone = self.steer_rate_zone / self.steer_rate_limit ** 2
-        if zone <= self.outer.linear_zone:
+        zone = max(self.outer.linear_zone, self.odom_noise_zone * self.odom_position_noise)
+        if self.steer_rate_limit > 0.0:
+            zone = max(zone, self.steer_rate_zone / self.steer_rate_limit ** 2)
+        if zone == self.outer.linear_zone:
             return self.outer
         return replace(self.outer, linear_zone=zone)
