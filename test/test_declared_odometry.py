@@ -9,17 +9,22 @@ barrier half-width eps at least ``odom_noise_eps`` sigma_theta; at the ``good`` 
 
 from dataclasses import replace
 import math
+from pathlib import Path
+import subprocess
+import sys
 
 from nfmr_dlsmc.analysis.comparison_scenarios import CASE1_LONGITUDINAL, run_scenario
 from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig, InnerLoopGains, OuterLoopGains
-from nfmr_dlsmc.core.sensing import SENSING_PRESETS
+from nfmr_dlsmc.core.sensing import declared_odometry_note, SENSING_PRESETS
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.runtime.params import controller_params, load_params_file
 from nfmr_dlsmc.runtime.share import shipped_config
 import numpy as np
 import pytest
 
+ROOT = Path(__file__).parents[1]
+BIN = Path(sys.executable).parent
 ROBOT_OUTER = OuterLoopGains(linear_zone=0.02, xi=0.5)
 ROBOT_INNER = InnerLoopGains(boundary_layer=0.02, eta_max=0.5)
 
@@ -108,3 +113,40 @@ def test_the_odometry_seed_draws_another_noise_the_same_for_every_run():
     first, again, other = run(0), run(0), run(1)
     assert np.array_equal(first, again)
     assert not np.array_equal(first, other)
+
+
+def test_odometry_noisier_than_declared_is_noted_and_quieter_is_not():
+    assert declared_odometry_note(0.001, 0.001, 0.001, 0.001) is None
+    assert declared_odometry_note(0.001, 0.001, 0.0, 0.0) is None  # ideal: quieter
+    assert declared_odometry_note(0.003, 0.003, 0.001, 0.001) is None
+    assert declared_odometry_note(0.001, 0.003, 0.003, 0.003) == (
+        'the controller declares odom_position_noise = 0.001 m but the simulated odometry '
+        'has disturbance.odom_position_noise = 0.003 m (doc/sensing.md)')
+    assert declared_odometry_note(0.0, 0.001, 0.0, 0.003) == (
+        'the controller declares odom_yaw_noise = 0.001 rad but the simulated odometry has '
+        'disturbance.odom_yaw_noise = 0.003 rad (doc/sensing.md)')
+    both = declared_odometry_note(0.0, 0.0, 0.003, 0.003)
+    assert ' 0 m but ' in both and ' and odom_yaw_noise = 0 rad but ' in both
+
+
+@pytest.mark.sim
+@pytest.mark.commands
+@pytest.mark.parametrize('command, argv', [
+    ('nfmr-eval', ['--plant', 'pybullet', '--params', 'config/robot_case1.yaml',
+                   '--duration', '0.05', '--json']),
+    # Refused for its duration after the note, before any node starts.
+    ('nfmr-run', ['--duration', '0.0001']),
+])
+def test_the_commands_note_a_noisier_odometry_than_the_file_declares(command, argv):
+    def notes(sensing):
+        proc = subprocess.run([str(BIN / command), *argv, '--sensing', sensing],
+                              capture_output=True, text=True, timeout=120, cwd=ROOT)
+        assert proc.returncode == (0 if command == 'nfmr-eval' else 2), proc.stderr
+        return [line for line in proc.stderr.splitlines() if 'odom_position_noise' in line]
+
+    assert notes('good') == []  # as declared
+    assert notes('harsh') == [
+        f'{command}: note: the controller declares odom_position_noise = 0.001 m but the '
+        'simulated odometry has disturbance.odom_position_noise = 0.003 m and odom_yaw_noise '
+        '= 0.001 rad but the simulated odometry has disturbance.odom_yaw_noise = 0.003 rad '
+        '(doc/sensing.md)']

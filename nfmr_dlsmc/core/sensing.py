@@ -17,8 +17,8 @@ from types import MappingProxyType
 
 from nfmr_dlsmc.core.validation import ParameterError
 
-__all__ = ['SENSING_CONTROLLER', 'SENSING_KEYS', 'SENSING_PRESETS', 'with_controller_sensing',
-           'with_sensing']
+__all__ = ['declared_odometry_note', 'SENSING_CONTROLLER', 'SENSING_KEYS', 'SENSING_PRESETS',
+           'with_controller_sensing', 'with_sensing']
 
 #: The sim parameters a preset sets, with their units.
 SENSING_KEYS = MappingProxyType({
@@ -88,3 +88,28 @@ def with_controller_sensing(flat: dict, preset: str | None) -> dict:
     """
     implied = SENSING_CONTROLLER.get(preset or '', {})
     return {**implied, **flat}
+
+
+def declared_odometry_note(declared_position: float, declared_yaw: float,
+                           simulated_position: float, simulated_yaw: float) -> str | None:
+    """
+    Return a note when the simulated odometry is noisier than the controller declares.
+
+    ``declared_position`` [m] and ``declared_yaw`` [rad] are the controller's
+    ``odom_position_noise`` and ``odom_yaw_noise``; ``simulated_position`` and
+    ``simulated_yaw`` the sim's ``disturbance.odom_position_noise`` and
+    ``disturbance.odom_yaw_noise``. Odometry quieter than declared only leaves the loops as
+    soft as a robot with that noise needs (doc/design.md, D39); noisier odometry than
+    declared is the case the declaration is for, so the run says so (None otherwise).
+    """
+    differences = []
+    if simulated_position > declared_position:
+        differences.append(f'odom_position_noise = {declared_position:g} m but the simulated '
+                           'odometry has disturbance.odom_position_noise = '
+                           f'{simulated_position:g} m')
+    if simulated_yaw > declared_yaw:
+        differences.append(f'odom_yaw_noise = {declared_yaw:g} rad but the simulated odometry '
+                           f'has disturbance.odom_yaw_noise = {simulated_yaw:g} rad')
+    if not differences:
+        return None
+    return f"the controller declares {' and '.join(differences)} (doc/sensing.md)"
