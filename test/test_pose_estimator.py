@@ -247,7 +247,8 @@ def test_reset_forgets_everything():
 @pytest.mark.parametrize('name, value', [('position_noise', 0.0), ('yaw_walk', -1.0),
                                          ('history', math.nan), ('speed_bias_walk', -0.1),
                                          ('yaw_rate_bias_walk', math.inf),
-                                         ('correction_smoothing', -0.001)])
+                                         ('correction_smoothing', -0.001),
+                                         ('speed_bias_along', 'sideways')])
 def test_bad_settings_name_the_parameter(name, value):
     with pytest.raises(ParameterError) as info:
         EstimatorConfig(**{name: value})
@@ -282,13 +283,52 @@ def test_the_prediction_is_forward_euler_of_eq3_with_the_biases(theta):
                                                0.005 ** 2]) * dt, rtol=1e-12, atol=0.0)
 
 
-@pytest.mark.parametrize('theta', [0.7, 2.5, -2.0, -0.4])
-def test_the_covariance_is_propagated_with_the_jacobian_of_the_prediction(theta):
-    # The EKF's linearisation F against a central difference of the prediction itself:
-    # P' - Q dt = F P F^T must be J P J^T for the numerical Jacobian J, for any P.
-    estimator = PoseEstimator(EstimatorConfig(enabled=True, **WALKS))
+@pytest.mark.parametrize('theta', [0.7, -2.0])
+@pytest.mark.parametrize('vx, vy', [(0.5, 0.0), (0.3, 0.4), (0.0, -0.3), (-0.2, 0.1)])
+def test_a_free_icr_prediction_moves_the_speed_bias_along_the_direction_of_motion(
+        theta, vx, vy):
+    # D40: the command (v_x, omega, v_y) turned into the world, and the bias b_v along it.
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, speed_bias_along='motion',
+                                              **WALKS))
     x = np.array([0.3, -0.2, theta, 0.02, -0.01])
-    u, dt, h = (0.5, 0.3), 0.05, 1e-6
+    dt = 0.01
+    predicted = estimator._propagate(x, np.zeros((5, 5)), (vx, 0.3, vy), dt)[0]
+    speed, bias = math.hypot(vx, vy), 0.02
+    heading = theta + math.atan2(vy, vx)  # the direction of motion in the world
+    assert predicted == pytest.approx([
+        0.3 + (speed + bias) * math.cos(heading) * dt,
+        -0.2 + (speed + bias) * math.sin(heading) * dt, theta + (0.3 - 0.01) * dt,
+        0.02, -0.01], abs=1e-15)
+    # A forward free-ICR command predicts as the unicycle's (v, omega) does; along the
+    # heading (the default) the bias stays on the body x axis whatever the motion.
+    if vy == 0.0 and vx > 0.0:
+        assert np.array_equal(predicted, estimator._propagate(
+            x, np.zeros((5, 5)), (vx, 0.3), dt)[0])
+    heading = PoseEstimator(EstimatorConfig(enabled=True, **WALKS))._propagate(
+        x, np.zeros((5, 5)), (vx, 0.3, vy), dt)[0]
+    assert heading[:2] == pytest.approx([
+        0.3 + ((vx + bias) * math.cos(theta) - vy * math.sin(theta)) * dt,
+        -0.2 + ((vx + bias) * math.sin(theta) + vy * math.cos(theta)) * dt], abs=1e-15)
+
+
+def test_a_free_icr_robot_at_rest_carries_its_speed_bias_along_its_heading():
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, speed_bias_along='motion',
+                                              **WALKS))
+    x = np.array([0.0, 0.0, math.pi / 2, 0.01, 0.0])
+    predicted = estimator._propagate(x, np.zeros((5, 5)), (0.0, 0.0, 0.0), 1.0)[0]
+    assert predicted[:2] == pytest.approx([0.0, 0.01], abs=1e-15)
+
+
+@pytest.mark.parametrize('theta', [0.7, 2.5, -2.0, -0.4])
+@pytest.mark.parametrize('u', [(0.5, 0.3), (0.2, 0.3, 0.4), (0.0, -0.2, -0.3), (0.0, 0.5, 0.0)])
+@pytest.mark.parametrize('along', ['heading', 'motion'])
+def test_the_covariance_is_propagated_with_the_jacobian_of_the_prediction(theta, u, along):
+    # The EKF's linearisation F against a central difference of the prediction itself:
+    # P' - Q dt = F P F^T must be J P J^T for the numerical Jacobian J, for any P; for the
+    # unicycle's (v, omega) and the free-ICR's (v_x, omega, v_y), at rest too.
+    estimator = PoseEstimator(EstimatorConfig(enabled=True, speed_bias_along=along, **WALKS))
+    x = np.array([0.3, -0.2, theta, 0.02, -0.01])
+    dt, h = 0.05, 1e-6
     zero = np.zeros((5, 5))
     jacobian = np.empty((5, 5))
     for j in range(5):

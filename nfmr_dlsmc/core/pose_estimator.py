@@ -26,6 +26,7 @@ from nfmr_dlsmc.core.schema import (
     documented,
     FLAG,
     NON_NEGATIVE,
+    one_of,
     param,
     POSITIVE,
 )
@@ -76,6 +77,11 @@ class EstimatorConfig:
                                    'estimated as a state, so that a speed the chassis keeps '
                                    'missing by a few mm/s does not leave the estimate behind '
                                    '(0: the commanded v is taken as it is)', NON_NEGATIVE)
+    speed_bias_along: str = param('heading', '', 'the direction the speed bias acts in for a '
+                                  'free-ICR command (v_x, omega, v_y): heading, along the '
+                                  'body x axis; motion, along the commanded direction of '
+                                  'motion, sideways in a crab (D40); the unicycle moves along '
+                                  'its heading either way', one_of('heading', 'motion'))
     yaw_rate_bias_walk: float = param(0.0, 'rad/s/sqrt(s)', 'random walk of the yaw rate '
                                       'against the commanded omega, estimated as a state '
                                       '(0: the commanded omega is taken as it is)',
@@ -171,25 +177,37 @@ class PoseEstimator:
 
         x' = x + (v + b_v) cos(theta) dt, y' = y + (v + b_v) sin(theta) dt,
         theta' = theta + (omega + b_omega) dt; the biases walk. A free-ICR command (D36)
-        u = (v_x, omega, v_y) adds the sideways speed: x' -= v_y sin(theta) dt,
-        y' += v_y cos(theta) dt (the speed bias stays along the heading).
+        u = (v_x, omega, v_y) moves the centre sideways too, and the speed bias along the
+        angle phi of the body frame:
+        x' = x + ((v_x cos(theta) - v_y sin(theta)) + b_v cos(theta + phi)) dt,
+        y' = y + ((v_x sin(theta) + v_y cos(theta)) + b_v sin(theta + phi)) dt,
+        phi = 0 (``speed_bias_along`` heading) or the commanded direction of motion
+        atan2(v_y, v_x) (``motion``, 0 at rest; doc/design.md, D40).
         """
         if dt <= 0.0:
             return x, P
         if not (math.isfinite(x[2]) and math.isfinite(dt)):
             return _OVERFLOWED  # stays so: pose() reports it and the caller resets
-        v, w = u[0] + x[3], u[1] + x[4]
+        w = u[1] + x[4]
         c, s = math.cos(x[2]), math.sin(x[2])
         F = np.eye(_N)
         if len(u) == 3:
-            side = u[2]
-            x = np.array([x[0] + (v * c - side * s) * dt, x[1] + (v * s + side * c) * dt,
+            side, forward, bias = u[2], u[0], x[3]
+            along_motion = self.config.speed_bias_along == 'motion' and (side or forward)
+            phi = math.atan2(side, forward) if along_motion else 0.0
+            cb, sb = math.cos(x[2] + phi), math.sin(x[2] + phi)
+            x = np.array([x[0] + (forward * c - side * s + bias * cb) * dt,
+                          x[1] + (forward * s + side * c + bias * sb) * dt,
                           x[2] + w * dt, x[3], x[4]])
-            F[0, 2], F[1, 2] = -(v * s + side * c) * dt, (v * c - side * s) * dt
+            F[0, 2] = -(forward * s + side * c + bias * sb) * dt
+            F[1, 2] = (forward * c - side * s + bias * cb) * dt
+            F[0, 3], F[1, 3] = cb * dt, sb * dt
         else:
+            v = u[0] + x[3]
             x = np.array([x[0] + v * c * dt, x[1] + v * s * dt, x[2] + w * dt, x[3], x[4]])
             F[0, 2], F[1, 2] = -v * s * dt, v * c * dt
-        F[0, 3], F[1, 3], F[2, 4] = c * dt, s * dt, dt
+            F[0, 3], F[1, 3] = c * dt, s * dt
+        F[2, 4] = dt
         return x, F @ P @ F.T + self._q * dt
 
     def _update(self, x, P, measured):
