@@ -24,8 +24,7 @@ from nfmr_dlsmc.cli.common import (
     UsageError,
 )
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
-from nfmr_dlsmc.core.sensing import declared_odometry_note, SENSING_PRESETS
-from nfmr_dlsmc.core.steering_presets import declared_steering_note
+from nfmr_dlsmc.core.sensing import declared_notes, SENSING_PRESETS
 from nfmr_dlsmc.core.trajectories import TRAJECTORY_TYPES
 from nfmr_dlsmc.runtime.tracking_session import unwind_note
 
@@ -101,15 +100,9 @@ def _run(args) -> int:
     duration = evaluation.duration
     check_run_length(duration, evaluation.params.dlsmc.dt)
     if evaluation.world is not None and args.controller == 'dlsmc':
-        dlsmc, motors = evaluation.params.dlsmc, evaluation.world.motors
-        odometry = evaluation.world.disturbance
-        for note in (declared_steering_note(dlsmc.steer_lag, dlsmc.steer_rate_limit,
-                                            motors.steer_lag, motors.steer_rate_limit),
-                     declared_odometry_note(dlsmc.odom_position_noise, dlsmc.odom_yaw_noise,
-                                            odometry.odom_position_noise,
-                                            odometry.odom_yaw_noise)):
-            if note:
-                print(f'nfmr-eval: note: {note}', file=sys.stderr)
+        for note in declared_notes(evaluation.params.dlsmc, evaluation.world.motors,
+                                   evaluation.world.disturbance):
+            print(f'nfmr-eval: note: {note}', file=sys.stderr)
     if evaluation.world is not None:  # the chassis's wheels (the kinematic plant has none)
         note = unwind_note(replace(evaluation.params, trajectory=evaluation.trajectory),
                            duration)

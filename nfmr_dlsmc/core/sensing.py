@@ -15,10 +15,11 @@ an absolute fix at 10 Hz, 50 ms late, 1 cm / 10 mrad of noise, one fix in a hund
 import math
 from types import MappingProxyType
 
+from nfmr_dlsmc.core.steering_presets import declared_steering_note
 from nfmr_dlsmc.core.validation import ParameterError
 
-__all__ = ['declared_odometry_note', 'SENSING_CONTROLLER', 'SENSING_KEYS', 'SENSING_PRESETS',
-           'with_controller_sensing', 'with_sensing']
+__all__ = ['declared_notes', 'declared_odometry_note', 'SENSING_CONTROLLER', 'SENSING_KEYS',
+           'SENSING_PRESETS', 'with_controller_sensing', 'with_sensing']
 
 #: The sim parameters a preset sets, with their units.
 SENSING_KEYS = MappingProxyType({
@@ -113,3 +114,20 @@ def declared_odometry_note(declared_position: float, declared_yaw: float,
     if not differences:
         return None
     return f"the controller declares {' and '.join(differences)} (doc/sensing.md)"
+
+
+def declared_notes(dlsmc, motors, odometry) -> list[str]:
+    """
+    Return the notes on what the controller declares against what is simulated.
+
+    ``dlsmc`` is the controller's :class:`~nfmr_dlsmc.core.gains.DlsmcConfig`, ``motors``
+    and ``odometry`` the sim's steer motors (``steer_lag``, ``steer_rate_limit``) and
+    odometry (``odom_position_noise``, ``odom_yaw_noise``): the steering's note
+    (:func:`~nfmr_dlsmc.core.steering_presets.declared_steering_note`), then the
+    odometry's (:func:`declared_odometry_note`), those that apply.
+    """
+    notes = (declared_steering_note(dlsmc.steer_lag, dlsmc.steer_rate_limit,
+                                    motors.steer_lag, motors.steer_rate_limit),
+             declared_odometry_note(dlsmc.odom_position_noise, dlsmc.odom_yaw_noise,
+                                    odometry.odom_position_noise, odometry.odom_yaw_noise))
+    return [note for note in notes if note]

@@ -27,14 +27,10 @@ from nfmr_dlsmc.analysis.evaluation import PAPER_DURATION, PATH_MARGIN
 from nfmr_dlsmc.analysis.run_metrics import run_timing
 from nfmr_dlsmc.bag.writer import BagWriter
 from nfmr_dlsmc.core.metrics import HOLD_FROM, PATH_HOLD_FROM
-from nfmr_dlsmc.core.sensing import (declared_odometry_note, SENSING_PRESETS,
+from nfmr_dlsmc.core.sensing import (declared_notes, SENSING_PRESETS,
                                      with_controller_sensing, with_sensing)
 from nfmr_dlsmc.core.steering import geometry_mismatch
-from nfmr_dlsmc.core.steering_presets import (
-    declared_steering_note,
-    STEERING_PRESETS,
-    with_steering,
-)
+from nfmr_dlsmc.core.steering_presets import STEERING_PRESETS, with_steering
 from nfmr_dlsmc.core.validation import ParameterError
 from nfmr_dlsmc.plants.registry import robot_plant
 from nfmr_dlsmc.ros.clock_watch import ClockWatch
@@ -185,17 +181,13 @@ def run(options: RunOptions) -> int:
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
-    motors, odometry, dlsmc = settings.world.motors, settings.world.disturbance, params.dlsmc
-    for note in (declared_steering_note(dlsmc.steer_lag, dlsmc.steer_rate_limit,
-                                        motors.steer_lag, motors.steer_rate_limit),
-                 declared_odometry_note(dlsmc.odom_position_noise, dlsmc.odom_yaw_noise,
-                                        odometry.odom_position_noise,
-                                        odometry.odom_yaw_noise)):
-        if note:
-            print(f'nfmr-run: note: {note}', file=sys.stderr)
+    for note in declared_notes(params.dlsmc, settings.world.motors,
+                               settings.world.disturbance):
+        print(f'nfmr-run: note: {note}', file=sys.stderr)
     if round(options.duration / params.dlsmc.dt) < 1:
         raise ParameterError('--duration', options.duration, 'must be at least one control '
                              f'period ({params.dlsmc.dt:g} s)', 's')
+    odometry = settings.world.disturbance
     check_odometry_timing(odometry.odom_rate, odometry.odom_latency, controller_flat)
     if params.fusion.enabled and settings.world.fix_period_steps is None:
         raise ParameterError('fusion.enabled', True, 'needs localisation fixes from the sim '
