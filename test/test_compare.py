@@ -32,7 +32,8 @@ HOLD_KEYS = ('t_conv_1cm', 'hold_distance_p99', 'hold_theta_e_p99', 'hold_omega_
     ('dlsmc_robot', {'thetadot_source': 'guess'}, 'dlsmc_robot.thetadot_source', 'one of'),
     ('dlsmc_robot', {'inner': {'eta_max': -1.0}}, 'dlsmc_robot.inner.eta_max', '>= 0'),
     ('dlsmc', {'rate': 1.0}, 'dlsmc.rate',
-     'known: align_speed, inner, omega_filter, omega_filter_band, outer'),
+     'known: align_speed, inner, odom_noise_eps, odom_noise_zone, odom_position_noise, '
+     'odom_yaw_noise, omega_filter, omega_filter_band, outer'),
     ('lqr', None, 'controller', 'must be one of'),
 ])
 def test_bad_gains_name_the_parameter(name, block, parameter, text):
