@@ -1,6 +1,6 @@
 """A path given as points: rounding, arc length, speed profile, timing, refusals."""
 
-from dataclasses import FrozenInstanceError
+from dataclasses import FrozenInstanceError, replace
 import math
 import pickle
 import timeit
@@ -8,10 +8,13 @@ import warnings
 
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
+from nfmr_dlsmc.core.path_heading import spin_curve
 from nfmr_dlsmc.core.path_reference import (
     MAX_COORDINATE,
     MAX_STAMP,
+    MAX_YAW,
     MERGE_DISTANCE,
+    MERGE_YAW,
     MIN_STAMP_STEP,
     PathError,
     PathProfile,
@@ -23,6 +26,8 @@ from nfmr_dlsmc.core.steering import RobotGeometry, steer_angle_series, SteerMod
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
+from scipy.interpolate import CubicSpline
+from scipy.spatial import cKDTree
 
 #: A loop of aisles with stations along them, as config/paths/warehouse_loop.csv.
 AISLES = np.array([(0.0, 0.0), (2.5, 0.0), (5.0, 0.0), (8.5, 0.0), (8.5, 2.0), (8.5, 4.5),
@@ -808,3 +813,217 @@ def test_a_corner_far_ahead_leaves_the_cruise_speed_on_the_straight_before_it():
     x, y, xdot, ydot = traj.sample(t)
     straight = (x > 1.0) & (x < 9.0) & (np.abs(y) < 1e-9)
     np.testing.assert_allclose(np.hypot(xdot, ydot)[straight], 0.5, rtol=1e-9)
+
+
+# -- the heading of points with a yaw -------------------------------------------------------
+
+#: Three legs of 2 m cut by two spins on the spot: three runs (free-ICR).
+THREE_RUNS = ([(0.0, 0.0), (2.0, 0.0), (2.0, 0.0), (2.0, 2.0), (2.0, 2.0), (4.0, 2.0)],
+              [0.0, 0.5, 1.5, 1.0, 0.0, 0.3])
+
+
+def test_a_path_cut_by_two_spins_joins_its_three_runs_and_starts_on_its_first_point():
+    points, yaw = THREE_RUNS
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        traj = PathTrajectory.from_points(points, yaw=yaw)
+    # Three straight legs, their corners not rounded (the reference stops at each spin).
+    assert traj.length == pytest.approx(6.0, abs=1e-9)
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
+    assert traj.sample(-1.0) == (0.0, 0.0, 0.0, 0.0)
+    np.testing.assert_array_equal(np.ravel(traj.sample(np.array([-1.0]))), 0.0)
+    x, y, _, _ = traj.sample(np.linspace(0.0, traj.duration, 20001))
+    for px, py in points:
+        assert np.hypot(x - px, y - py).min() < 1e-3
+
+
+def test_a_timed_path_with_yaw_keeps_its_points_stamps_and_profile():
+    profile = PathProfile(corner_radius=0.0)
+    traj = PathTrajectory.from_points([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (4.0, 2.0, 0.0)],
+                                      profile, yaw=[0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(traj.points, [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)])
+    np.testing.assert_array_equal(traj.stamps, [0.0, 2.0, 4.0])
+    assert traj.profile is profile
+    assert repr(traj) == ('PathTrajectory(timed, with yaw, 3 points, length 2.000 m, '
+                          'duration 4.000 s)')
+
+
+@pytest.mark.parametrize('points, yaw', [
+    ([(0.0, 0.0), (0.0, 0.0), (2.0, 0.0)], [0.0, math.pi / 2, 1.0]),
+    ([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (4.0, 2.0, 0.0)], [0.0, 0.5, 1.0]),
+    THREE_RUNS,
+])
+def test_the_heading_of_one_instant_is_the_same_alone_or_in_an_array(points, yaw):
+    traj = PathTrajectory.from_points(points, yaw=yaw)
+    # The instants where one phase (a spin, a run, the timed curve) ends and the next starts,
+    # the end, and instants inside each phase, asked one at a time.
+    spin = float(spin_curve(0.0, math.pi / 2, 1.0, 2.0).x[-1])
+    end = traj.duration
+    instants = [0.0, 1e-9, spin, spin + 0.5, 0.5 * end, end - 1e-3, math.nextafter(end, 0.0),
+                end]
+    instants += list(np.linspace(0.0, end, 41))
+    for t in instants:
+        psi, rate = traj.yaw_reference(np.array([t]))
+        assert (psi[0], rate[0]) == pytest.approx(traj.yaw_reference(t), abs=1e-12)
+    assert traj.yaw_reference(np.array([end])) == (traj.yaw[-1], 0.0)
+    last = traj.yaw_reference(math.nextafter(end, 0.0))
+    assert last == pytest.approx((traj.yaw[-1], 0.0), abs=1e-6)
+
+
+@pytest.mark.parametrize('yaw', [None, [0.0, 0.5, 0.5, 1.0]])
+def test_sampling_a_hair_before_the_end_gives_the_end_point_at_rest(yaw):
+    points = [(0.0, 0.0), (3.0, 0.0), (3.0, 2.0), (5.0, 2.0)]
+    traj = PathTrajectory.from_points(points, yaw=yaw)
+    t = math.nextafter(traj.duration, 0.0)
+    assert traj.sample(t) == pytest.approx((5.0, 2.0, 0.0, 0.0), abs=1e-6)
+    np.testing.assert_allclose(np.ravel(traj.sample(np.array([t]))), traj.sample(t),
+                               atol=1e-12)
+
+
+def test_a_yawed_path_starts_at_its_start_speed_and_each_run_after_a_spin_from_rest():
+    # Above omega_max = 0.2 and sqrt(yaw_acceleration / 2) = 0.22: neither bounds the speed
+    # where the heading does not turn.
+    profile = PathProfile(omega_max=0.2, yaw_acceleration=0.1, start_speed=0.3)
+    straight = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (4.0, 0.0)], profile,
+                                          yaw=[0.0, 0.0, 1.0])
+    assert straight.sample(0.0)[2] == pytest.approx(0.3, abs=1e-12)
+    spun = PathTrajectory.from_points([(0.0, 0.0), (0.0, 0.0), (2.0, 0.0)], profile,
+                                      yaw=[0.0, 1.0, 1.0])
+    spin = float(spin_curve(0.0, 1.0, 0.2, 0.1).x[-1])
+    assert spun.sample(spin) == (0.0, 0.0, 0.0, 0.0)
+    assert math.hypot(*spun.sample(spin + 1e-6)[2:]) < 1e-3
+
+
+def test_the_yaw_acceleration_limit_binds_as_given():
+    # The heading turns by 1.5 rad along the middle 2 m, omega_max out of reach: the turn is
+    # as fast as yaw_acceleration allows, its peak within a few percent of it.
+    for alpha in (0.2, 0.5):
+        traj = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (4.0, 0.0), (6.0, 0.0)],
+                                          PathProfile(omega_max=5.0, yaw_acceleration=alpha),
+                                          yaw=[0.0, 0.0, 1.5, 1.5])
+        t = np.linspace(0.0, traj.duration, 200001)
+        _, rate = traj.yaw_reference(t)
+        assert np.abs(np.diff(rate) / np.diff(t)).max() == pytest.approx(alpha, rel=0.05)
+
+
+def test_a_heading_that_barely_turns_builds_quietly_as_the_path_without_it():
+    points = [(0.0, 0.0), (2.0, 0.0), (4.0, 0.0)]
+    plain = PathTrajectory.from_points(points)
+    for yaw in ([0.0, 1e-300, 0.0], [0.0, 0.0, 0.0]):
+        with warnings.catch_warnings():
+            warnings.simplefilter('error')
+            traj = PathTrajectory.from_points(points, yaw=yaw)
+        assert traj.duration == pytest.approx(plain.duration, rel=1e-12)
+
+
+def test_a_yawed_path_speeds_up_and_slows_down_within_the_profile():
+    profile = PathProfile()
+    traj = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0), (4.0, 0.0), (4.0, 2.0)],
+                                      profile, yaw=[0.0, 0.0, 1.0, 1.0])
+    t = np.linspace(0.0, traj.duration, 100001)
+    _, _, xdot, ydot = traj.sample(t)
+    dv = np.diff(np.hypot(xdot, ydot)) / np.diff(t)
+    assert dv.max() <= profile.acceleration * 1.01
+    assert dv.min() >= -profile.deceleration * 1.01
+
+
+def test_points_with_yaw_merge_within_a_millimetre_and_a_milliradian_only():
+    far = [(0.0, 0.0), (MERGE_DISTANCE, 0.0), (2.0, 0.0)]
+    assert len(PathTrajectory.from_points(far, yaw=[0.0, 0.0, 0.0]).points) == 3
+    close = [(0.0, 0.0), (MERGE_DISTANCE / 2.0, 0.0), (2.0, 0.0)]
+    for yaw in ([1.0, 1.0, 1.0], [0.0, MERGE_YAW, 0.0]):
+        assert len(PathTrajectory.from_points(close, yaw=yaw).points) == 2
+
+
+@pytest.mark.parametrize('points', [[(0.0, 0.0)], [(0.0, 0.0), (0.0, 0.0), (0.0, 0.0)]])
+def test_a_path_of_one_position_with_yaw_is_refused_as_such(points):
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points, yaw=[0.0, 1.0, 2.0][:len(points)])
+    assert str(caught.value) == (
+        f'trajectory.path: 1 distinct position(s) ({len(points)} points given; points closer '
+        'than 1 mm merge or turn on the spot): a path needs at least 2')
+    assert caught.value.index is None and caught.value.value == len(points)
+
+
+def test_a_bad_yaw_is_refused_with_the_point_it_names_and_the_bound_is_allowed():
+    points = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points, yaw=[0.0, 2.0 * MAX_YAW, 0.0])
+    assert caught.value.index == 1 and caught.value.value == (1.0, 0.0, 2.0 * MAX_YAW)
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points, yaw=[0.0, 0.0])
+    assert caught.value.index is None and caught.value.value == (2,)
+    traj = PathTrajectory.from_points(points, yaw=[MAX_YAW, MAX_YAW, MAX_YAW])
+    assert traj.yaw[0] == MAX_YAW
+
+
+def test_a_too_fast_turn_is_refused_with_the_yaw_rate_it_asks_for():
+    # 3 rad in 2 s between the second and third point: 1.5 rad/s.
+    with pytest.raises(PathError, match=r'point 2 at \(2.00, 0.00\) m: the stamps ask for a '
+                                        r'yaw rate of 1.5 rad/s between this point and the '
+                                        r'one before \(3 rad in 2 s\)'):
+        PathTrajectory.from_points([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (4.0, 2.0, 0.0)],
+                                   yaw=[0.0, 1.0, 4.0])
+
+
+@pytest.mark.parametrize('points, index, value, reason', [
+    ([(-1.0, 0.0, 0.0), (2.0, 1.0, 0.0)], 0, (-1.0, 0.0, 0.0),
+     'its stamp -1 s is negative; the reference starts at t = 0'),
+    ([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (2.0, 2.0, 0.0)], 2, (2.0, 2.0, 0.0),
+     "its stamp 2 s does not come after the previous point's 2 s; stamps must increase"),
+])
+def test_a_refused_stamp_keeps_its_point_as_the_value_and_says_why(points, index, value,
+                                                                   reason):
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points)
+    assert caught.value.index == index and caught.value.value == value
+    assert str(caught.value).endswith(f' m: {reason}')
+
+
+# -- the curve's edges ----------------------------------------------------------------------
+
+def test_on_a_straight_path_no_curvature_limit_holds_back_the_start_speed():
+    # kappa and dkappa/ds are 0 all along: only the cruise speed bounds it, not omega_max,
+    # lateral_acceleration or curvature_rate (all below 3 in their units).
+    profile = PathProfile(speed=3.0, start_speed=3.0, curvature_rate=1.0, omega_max=1.0,
+                          lateral_acceleration=1.0)
+    traj = PathTrajectory.from_points([(0.0, 0.0), (20.0, 0.0)], profile)
+    assert traj.sample(0.0)[2:] == pytest.approx((3.0, 0.0), abs=1e-9)
+
+
+def test_a_wide_corner_leaves_both_end_legs_straight():
+    # A 15 m corner radius: the Gaussian is 1.5 m wide, its padding 9 m along each end leg.
+    traj = PathTrajectory.from_points([(0.0, 0.0), (40.0, 0.0), (40.0, 40.0)],
+                                      PathProfile(corner_radius=15.0))
+    x, y, _, _ = traj.geometry(np.linspace(0.0, traj.length, 20001))
+    assert np.abs(y[x < 5.0]).max() < 1e-9
+    assert np.abs(x[y > 35.0] - 40.0).max() < 1e-9
+
+
+def test_without_corner_radius_the_reference_is_the_natural_spline_through_the_points():
+    # The cubic spline of the chord length with natural ends (its last leg 5 m long, the
+    # others 0.1 m), resampled every centimetre: within some 10 um of it all along.
+    points = np.array([(0.0, 0.0), (0.1, 0.05), (0.2, 0.0), (5.0, 1.0)])
+    chord = np.r_[0.0, np.cumsum(np.hypot(*np.diff(points, axis=0).T))]
+    spline = CubicSpline(chord, points, bc_type='natural')
+    near = cKDTree(spline(np.linspace(0.0, chord[-1], 200001)))
+    traj = PathTrajectory.from_points(points, PathProfile(corner_radius=0.0))
+    x, y, _, _ = traj.geometry(np.linspace(0.0, traj.length, 5001))
+    assert near.query(np.c_[x, y])[0].max() < 1e-4
+
+
+@pytest.mark.parametrize('name', ['zigzag, lateral bound', 'zigzag, yaw rate bound'])
+def test_with_a_free_curvature_rate_the_curvature_limits_hold_between_the_samples_too(name):
+    # Each sample's limit takes the curvature halfway to its neighbours as well, so that
+    # v^2 kappa and v kappa stay within the limits on the intervals (v^2 linear in s there).
+    points, profile = CASES[name]
+    profile = replace(profile, curvature_rate=1e6)
+    traj = PathTrajectory.from_points(points, profile)
+    t = np.linspace(0.0, traj.duration, 200001)
+    _, _, xdot, ydot = traj.sample(t)
+    xddot, yddot = traj.acceleration(t)
+    v = np.hypot(xdot, ydot)
+    moving = v > 1e-3
+    across = np.abs(xdot * yddot - ydot * xddot)[moving] / v[moving]
+    assert across.max() <= profile.lateral_acceleration * (1.0 + 1e-6)
+    assert (across / v[moving]).max() <= profile.omega_max * (1.0 + 1e-6)
