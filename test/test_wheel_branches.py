@@ -288,6 +288,24 @@ def test_a_feasible_interval_that_wraps_through_zero_is_named_whole():
     assert start == pytest.approx(-1.212, abs=0.015) and end == pytest.approx(1.429, abs=0.015)
 
 
+def test_the_note_lists_five_stops_and_says_when_there_are_more():
+    def listed(n):
+        note = unwind_note([float(k) for k in range(1, n + 1)])
+        assert f'{n} time(s)' in note
+        return re.search(r'at t = (.*) s\)', note).group(1)
+
+    assert listed(5) == '1.0, 2.0, 3.0, 4.0, 5.0'
+    assert listed(6) == listed(7) == '1.0, 2.0, 3.0, 4.0, 5.0, ...'
+
+
+def test_a_direction_every_heading_fits_is_named_within_half_a_turn():
+    # One direction and joints of +-pi: every fixed heading fits (eq. B3); the note names
+    # them on [0, pi) (the rest is "that plus pi"), to the grid's last step below pi.
+    note = unwind_note([1.0], np.full(10, 0.3), 0.5, PI)
+    start, end = (float(v) for v in re.search(r'heading of (\S+) to (\S+) rad', note).groups())
+    assert start == 0.0 and end == pytest.approx(math.radians(179.5), abs=0.005) and end < PI
+
+
 def test_a_run_s_note_only_in_the_free_icr_mode():
     flat = load_params_file('config/robot_free_icr.yaml')
     lemniscate = flat | {'trajectory.name': 'lemniscate'}
