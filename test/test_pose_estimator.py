@@ -546,25 +546,31 @@ def test_the_history_keeps_the_tick_at_its_horizon_and_the_counters_count_each_m
     assert estimator.out_of_order == 3 and estimator.fused == 6
 
 
-def test_between_messages_the_smoothed_position_moves_with_the_estimate_and_its_speed_bias():
+@pytest.mark.parametrize('sideways', [False, True])
+def test_between_messages_the_smoothed_position_moves_with_the_estimate_and_its_speed_bias(
+        sideways):
     # Straight on at a speed 1 cm/s above the command, learnt as the speed bias: once the
     # messages stop, the estimate moves by (v + b_v) dt a tick, and so must the smoothed
-    # position, its remaining gap to the estimate shrinking by exp(-dt / tau) a tick.
+    # position, its remaining gap to the estimate shrinking by exp(-dt / tau) a tick. Also
+    # for a free-ICR crab to the side with the bias along its motion (D40).
     tau = 0.005
-    walks = {'enabled': True, 'position_walk': 3e-5, 'yaw_walk': 3e-5, 'speed_bias_walk': 0.003}
+    walks = {'enabled': True, 'position_walk': 3e-5, 'yaw_walk': 3e-5, 'speed_bias_walk': 0.003,
+             'speed_bias_along': 'motion'}
     smooth = PoseEstimator(EstimatorConfig(**walks, correction_smoothing=tau))
     plain = PoseEstimator(EstimatorConfig(**walks))
     rng = np.random.default_rng(7)
+    command = (0.0, 0.0, 0.49) if sideways else (0.49, 0.0)
     gaps = []
     for k in range(1060):
         t = k * DT
         if k % 10 == 0 and k < 1000:
-            z = (0.5 * t + rng.normal(0, 0.001), rng.normal(0, 0.001), rng.normal(0, 0.001))
+            along, across = 0.5 * t + rng.normal(0, 0.001), rng.normal(0, 0.001)
+            z = ((across, along) if sideways else (along, across)) + (rng.normal(0, 0.001),)
             for estimator in (smooth, plain):
                 estimator.measure(t, *z, (0.001, 0.001))
         p, e = smooth.pose(t), plain.pose(t)
         for estimator in (smooth, plain):
-            estimator.command(0.49, 0.0)
+            estimator.command(*command)
         if k >= 1000:
             gaps.append(np.subtract(e[:2], p[:2]))
     assert plain.bias[0] == pytest.approx(0.01, abs=3e-3)

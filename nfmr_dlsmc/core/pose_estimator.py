@@ -193,8 +193,7 @@ class PoseEstimator:
         F = np.eye(_N)
         if len(u) == 3:
             side, forward, bias = u[2], u[0], x[3]
-            along_motion = self.config.speed_bias_along == 'motion' and (side or forward)
-            phi = math.atan2(side, forward) if along_motion else 0.0
+            phi = self._bias_angle(u)
             cb, sb = math.cos(x[2] + phi), math.sin(x[2] + phi)
             x = np.array([x[0] + (forward * c - side * s + bias * cb) * dt,
                           x[1] + (forward * s + side * c + bias * sb) * dt,
@@ -209,6 +208,17 @@ class PoseEstimator:
             F[0, 3], F[1, 3] = c * dt, s * dt
         F[2, 4] = dt
         return x, F @ P @ F.T + self._q * dt
+
+    def _bias_angle(self, u: tuple) -> float:
+        """
+        Return the angle [rad] from the heading along which the speed bias acts (D40).
+
+        0 but for a free-ICR command u = (v_x, omega, v_y) that moves, with
+        ``speed_bias_along`` motion: then its direction of motion atan2(v_y, v_x).
+        """
+        if len(u) == 3 and self.config.speed_bias_along == 'motion' and (u[0] or u[2]):
+            return math.atan2(u[2], u[0])
+        return 0.0
 
     def _update(self, x, P, measured):
         """
@@ -332,9 +342,10 @@ class PoseEstimator:
         Return the position handed to the law at ``t``: the estimate's with its steps smoothed.
 
         The position returned at the previous tick, p, is carried on to ``t`` as the filter
-        predicts (eq. (3) with the previous tick's command, the estimated speed bias and the
-        estimated yaw), then drawn to the estimate e: p(t) = p^- + (1 - exp(-dt / tau))
-        (e - p^-), tau = ``correction_smoothing``. Between messages p moves as e does; the
+        predicts (eq. (3) with the previous tick's command, the estimated speed bias along
+        the direction the prediction takes it and the estimated yaw), then drawn to the
+        estimate e: p(t) = p^- + (1 - exp(-dt / tau)) (e - p^-), tau =
+        ``correction_smoothing``. Between messages p moves as e does; the
         step a message makes in e reaches p over tau.
         """
         if self._output is None or t < self._output[0]:
@@ -342,9 +353,15 @@ class PoseEstimator:
         t0, px, py = self._output
         dt = t - t0
         if dt > 0.0:
-            step = (u[0] + x[3]) * dt
             c, s = math.cos(x[2]), math.sin(x[2])
-            px, py = px + step * c, py + step * s
+            phi = self._bias_angle(u)
+            if phi == 0.0:  # the bias along the heading
+                step = (u[0] + x[3]) * dt
+                px, py = px + step * c, py + step * s
+            else:  # along the free-ICR command's direction of motion, as predicted
+                bias = x[3] * dt
+                px = px + u[0] * dt * c + bias * math.cos(x[2] + phi)
+                py = py + u[0] * dt * s + bias * math.sin(x[2] + phi)
             if len(u) == 3:  # the free-ICR command's sideways speed
                 px, py = px - u[2] * dt * s, py + u[2] * dt * c
             gain = -math.expm1(-dt / self.config.correction_smoothing)
