@@ -129,24 +129,38 @@ def test_odometry_noisier_than_declared_is_noted_and_quieter_is_not():
     assert ' 0 m but ' in both and ' and odom_yaw_noise = 0 rad but ' in both
 
 
+NOISIER = ('note: the controller declares odom_position_noise = 0.001 m but the simulated '
+           'odometry has disturbance.odom_position_noise = 0.003 m and odom_yaw_noise = '
+           '0.001 rad but the simulated odometry has disturbance.odom_yaw_noise = 0.003 rad '
+           '(doc/sensing.md)')
+
+
+def _stderr(command, *argv, status=0, timeout=120):
+    proc = subprocess.run([str(BIN / command), *argv], capture_output=True, text=True,
+                          timeout=timeout, cwd=ROOT)
+    assert proc.returncode == status, proc.stderr
+    return proc.stderr.splitlines()
+
+
 @pytest.mark.sim
 @pytest.mark.commands
-@pytest.mark.parametrize('command, argv', [
-    ('nfmr-eval', ['--plant', 'pybullet', '--params', 'config/robot_case1.yaml',
-                   '--duration', '0.05', '--json']),
-    # Refused for its duration after the note, before any node starts.
-    ('nfmr-run', ['--duration', '0.0001']),
-])
-def test_the_commands_note_a_noisier_odometry_than_the_file_declares(command, argv):
-    def notes(sensing):
-        proc = subprocess.run([str(BIN / command), *argv, '--sensing', sensing],
-                              capture_output=True, text=True, timeout=120, cwd=ROOT)
-        assert proc.returncode == (0 if command == 'nfmr-eval' else 2), proc.stderr
-        return [line for line in proc.stderr.splitlines() if 'odom_position_noise' in line]
+def test_nfmr_eval_notes_a_noisier_odometry_than_the_file_declares():
+    argv = ('--plant', 'pybullet', '--params', 'config/robot_case1.yaml', '--duration',
+            '0.05', '--json', '--sensing')
+    assert not [line for line in _stderr('nfmr-eval', *argv, 'good') if 'odom_' in line]
+    assert [line for line in _stderr('nfmr-eval', *argv, 'harsh') if 'odom_' in line] == [
+        f'nfmr-eval: {NOISIER}']
 
-    assert notes('good') == []  # as declared
-    assert notes('harsh') == [
-        f'{command}: note: the controller declares odom_position_noise = 0.001 m but the '
-        'simulated odometry has disturbance.odom_position_noise = 0.003 m and odom_yaw_noise '
-        '= 0.001 rad but the simulated odometry has disturbance.odom_yaw_noise = 0.003 rad '
-        '(doc/sensing.md)']
+
+@pytest.mark.ros
+@pytest.mark.sim
+@pytest.mark.commands
+def test_nfmr_run_notes_a_noisier_odometry_once_and_only_for_a_run_it_starts(tmp_path):
+    # Refused (its duration): the one line of the error, no note before it.
+    refused = _stderr('nfmr-run', '--sensing', 'harsh', '--duration', '0.0001', status=2)
+    assert [line for line in refused if 'pybullet build time' not in line] == [
+        'nfmr-run: error: --duration = 0.0001 s: must be at least one control period '
+        '(0.001 s)']
+    lines = _stderr('nfmr-run', '--sensing', 'harsh', '--duration', '0.05', '--no-record',
+                    '--no-compare', '--out', str(tmp_path), timeout=300)
+    assert [line for line in lines if 'odom_' in line] == [f'nfmr-run: {NOISIER}']

@@ -129,6 +129,8 @@ def _run(args) -> int:
     free_icr = flat is not None and flat.get('motion') == 'free_icr'
     if args.matrix:
         _check_matrix(args)
+    if args.odom_seed != 0:
+        _check_odom_seed(args, free_icr)
     if free_icr:
         names = _free_icr_laws(args)
     else:
@@ -146,8 +148,6 @@ def _run(args) -> int:
     if args.steering is not None and args.plant != 'pybullet':
         raise UsageError('--steering applies to --plant pybullet: the kinematic model has no '
                          'steer motors')
-    if args.odom_seed != 0:
-        _check_odom_seed(args, free_icr)
     if args.params is not None and args.path is None and not free_icr:
         raise UsageError('--params times a path: give --path too')
     reference = None

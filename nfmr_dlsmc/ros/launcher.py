@@ -181,9 +181,6 @@ def run(options: RunOptions) -> int:
     mismatch = _robot_mismatch(params, settings)
     if mismatch:
         raise ParamsFileError(f'{config}: {mismatch}')
-    for note in declared_notes(params.dlsmc, settings.world.motors,
-                               settings.world.disturbance):
-        print(f'nfmr-run: note: {note}', file=sys.stderr)
     if round(options.duration / params.dlsmc.dt) < 1:
         raise ParameterError('--duration', options.duration, 'must be at least one control '
                              f'period ({params.dlsmc.dt:g} s)', 's')
@@ -198,6 +195,10 @@ def run(options: RunOptions) -> int:
                              'encoders itself, in lockstep (a wheel odometry node of its '
                              'own would run behind the steps)')
     reservation = reserve_domain(options.domain)
+    # Once every check has passed: a refused run says one line, not a note first.
+    for note in declared_notes(params.dlsmc, settings.world.motors,
+                               settings.world.disturbance):
+        print(f'nfmr-run: note: {note}', file=sys.stderr)
     try:
         return _run(options, config, params, settings, reservation)
     finally:
