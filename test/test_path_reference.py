@@ -10,6 +10,7 @@ from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
 from nfmr_dlsmc.core.path_heading import spin_curve
 from nfmr_dlsmc.core.path_reference import (
+    CUSP_ANGLE,
     MAX_COORDINATE,
     MAX_STAMP,
     MAX_YAW,
@@ -1027,3 +1028,152 @@ def test_with_a_free_curvature_rate_the_curvature_limits_hold_between_the_sample
     across = np.abs(xdot * yddot - ydot * xddot)[moving] / v[moving]
     assert across.max() <= profile.lateral_acceleration * (1.0 + 1e-6)
     assert (across / v[moving]).max() <= profile.omega_max * (1.0 + 1e-6)
+
+
+# -- the refusals' values, the stamp bound, the ends and the start --------------------------
+
+#: A bump 10 cm long, symmetric about its middle: without corner radius its natural spline
+#: curves from the first point on, its curvature changing at some 116 1/m^2 there.
+BUMP = [(0.0, 0.0), (0.05, 0.05), (0.1, 0.0)]
+
+
+def test_a_profile_of_another_type_is_refused_naming_that_type():
+    """A profile that is not a PathProfile is refused with its own type's name."""
+    for profile, name in (({'speed': 1.0}, 'dict'), (0.5, 'float')):
+        with pytest.raises(TypeError, match=f'^profile must be a PathProfile, not {name}$'):
+            PathTrajectory.from_points(AISLES, profile)
+
+
+@pytest.mark.parametrize('points, index, value', [
+    ([(1.0, 2.0, 3.0, 4.0)] * 3, None, (3, 4)),
+    ([1.0, 2.0, 3.0], None, (3,)),
+    ([(0.0, 0.0), (1.0, 0.0), (1e200, 0.0)], 2, (1e200, 0.0)),
+    ([(0.0, 0.0, 0.0), (1.0, 1e200, 0.0)], 1, (1.0, 1e200, 0.0)),
+    ([(1.0, 2.0), (1.0004, 2.0), (1.0, 2.0009)], None, 3),
+    ([], None, 0),
+    ([(0.0, 0.0), (1.0, 0.0), (0.0, 0.1)], 1, (1.0, 0.0)),
+])
+def test_every_refusal_keeps_what_it_names_as_its_value(points, index, value):
+    """A refusal's value is the shape, the point or the count of points it is about."""
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points)
+    assert caught.value.index == index
+    assert caught.value.value == value
+    assert pickle.loads(pickle.dumps(caught.value)).value == value
+
+
+def test_a_stamp_on_the_bound_is_allowed_and_the_first_after_it_is_named():
+    """MAX_STAMP itself is a stamp; the refusal names the first point stamped after it."""
+    points = [(0.0, 0.0, 0.0), (MAX_STAMP, 1.0, 0.0), (2.0 * MAX_STAMP, 2.0, 0.0)]
+    with pytest.raises(PathError) as caught:
+        PathTrajectory.from_points(points)
+    assert caught.value.index == 2 and caught.value.value == (2.0 * MAX_STAMP, 2.0, 0.0)
+    assert str(caught.value) == ('trajectory.path: point 2 at (2.00, 0.00) m: its stamp 2e+09 s '
+                                 'is after 1e+09 s (32 years); stamps count from the start of '
+                                 'the path')
+    assert PathTrajectory.from_points(points[:2]).duration == MAX_STAMP
+
+
+def test_points_exactly_a_millimetre_apart_stay_two_points():
+    """MERGE_DISTANCE apart two points are kept; a float step closer they merge."""
+    apart = [(0.0, 0.0), (MERGE_DISTANCE, 0.0), (2.0, 0.0)]
+    assert len(PathTrajectory.from_points(apart).points) == 3
+    closer = [(0.0, 0.0), (math.nextafter(MERGE_DISTANCE, 0.0), 0.0), (2.0, 0.0)]
+    np.testing.assert_array_equal(PathTrajectory.from_points(closer).points,
+                                  [(0.0, 0.0), (2.0, 0.0)])
+
+
+def test_a_turn_of_exactly_the_cusp_angle_is_followed_and_a_hair_more_refused():
+    """A turn of CUSP_ANGLE is allowed (only one over it is a cusp), to the last float."""
+    # With the corner at the origin and unit legs the turn computes to CUSP_ANGLE exactly.
+    for turn, refused in ((CUSP_ANGLE, False), (CUSP_ANGLE + 1e-9, True)):
+        points = [(-1.0, 0.0), (0.0, 0.0), (math.cos(turn), math.sin(turn))]
+        if refused:
+            with pytest.raises(PathError, match='turns back on itself') as caught:
+                PathTrajectory.from_points(points)
+            assert caught.value.index == 1
+        else:
+            assert 1.0 < PathTrajectory.from_points(points).length < 2.0
+
+
+def test_the_stamps_and_the_yaw_of_a_path_cannot_be_changed():
+    """A built path's stamps and yaws are read-only, as its points are."""
+    traj = PathTrajectory.from_points([(0.0, 0.0, 0.0), (2.0, 1.0, 0.0), (4.0, 2.0, 0.0)],
+                                      yaw=[0.0, 0.5, 1.0])
+    with pytest.raises(ValueError):
+        traj.stamps[0] = 1.0
+    with pytest.raises(ValueError):
+        traj.yaw[0] = 1.0
+    np.testing.assert_array_equal(traj.stamps, [0.0, 2.0, 4.0])
+
+
+def test_the_end_poses_take_the_tangent_at_the_very_first_and_last_point():
+    """The start and end yaws are the tangents at the ends, however soon the path turns."""
+    # An L of 1 m legs: the tangent 1 m in is already in the corner's arc.
+    traj = PathTrajectory.from_points([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)])
+    assert traj.start_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)
+    assert traj.end_pose == pytest.approx((1.0, 1.0, math.pi / 2.0), abs=1e-9)
+    assert traj.heading(-1.0) == pytest.approx(0.0, abs=1e-9)
+    # The bump is its own mirror image: it ends at the mirror of its start tangent, from
+    # which its tangent a centimetre before still differs by some 6 mrad. The natural
+    # spline of its chord leaves the first point with dy/dx = 1.5.
+    traj = PathTrajectory.from_points(BUMP, PathProfile(corner_radius=0.0))
+    yaw0, yaw1 = traj.start_pose[2], traj.end_pose[2]
+    assert yaw0 == pytest.approx(math.atan(1.5), abs=1e-4)
+    assert yaw1 == pytest.approx(-yaw0, abs=1e-9)
+    assert traj.heading(traj.duration + 1.0) == yaw1
+    assert traj.geometry(traj.length)[2] == pytest.approx(yaw1, abs=1e-12)
+    assert abs(traj.geometry(traj.length - 0.01)[2] - yaw1) > 1e-3
+
+
+def test_before_the_start_it_moves_at_exactly_the_start_speed_along_a_unit_tangent():
+    """The velocity before the start is start_speed times the unit tangent, to rounding."""
+    # A zigzag of 1 cm legs: sampled coarsely, |dr/ds| at its start is 0.3 % below 1.
+    # Its curvature limits freed, the start speed of 1 cm/s is not cut.
+    profile = PathProfile(corner_radius=0.0, start_speed=0.01, omega_max=100.0,
+                          curvature_rate=1e6)
+    traj = PathTrajectory.from_points([(0.0, 0.0), (0.01, 0.0), (0.0, 0.01), (0.01, 0.02)],
+                                      profile)
+    x0, y0, yaw0 = traj.start_pose
+    x, y, _, _ = traj.geometry(np.array([0.0, 1e-6]))
+    assert math.hypot(x[1] - x0, y[1] - y0) / 1e-6 < 0.999
+    for x, y, xdot, ydot in (traj.sample(-2.0), np.ravel(traj.sample(np.array([-2.0])))):
+        assert math.hypot(xdot, ydot) == pytest.approx(0.01, rel=1e-12)
+        assert math.atan2(ydot, xdot) == pytest.approx(yaw0, abs=1e-12)
+        assert (x, y) == pytest.approx((x0 - 0.02 * math.cos(yaw0),
+                                        y0 - 0.02 * math.sin(yaw0)), abs=1e-15)
+
+
+def test_a_path_with_a_vanishing_bend_builds_without_a_warning():
+    """A bend of 1e-160 m, whose curvature limits overflow to inf, builds quietly."""
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        traj = PathTrajectory.from_points([(0.0, 0.0), (1.0, 1e-160), (2.0, 0.0)])
+    # Timed as the straight 2 m between its ends.
+    straight = PathTrajectory.from_points([(0.0, 0.0), (2.0, 0.0)])
+    assert traj.duration == pytest.approx(straight.duration, rel=1e-12)
+
+
+def test_a_start_speed_above_the_curvature_rate_s_is_cut_to_what_the_first_point_allows():
+    """Started too fast for the curvature rate, it starts at v |dkappa/ds| = curvature_rate."""
+    # 0.5 m/s is far above what the bump's 116 1/m^2 allow at 2.5 1/(m s): 2.2 cm/s. The
+    # limit is that at the first point (kappa' barely changes within its first centimetre),
+    # not that of the faster-changing curvature beyond.
+    profile = PathProfile(corner_radius=0.0, start_speed=0.5)
+    traj = PathTrajectory.from_points(BUMP, profile)
+    v0 = math.hypot(*traj.sample(0.0)[2:])
+    kappa = traj.geometry(np.array([0.0, 1e-3]))[3]
+    rate = abs(kappa[1] - kappa[0]) / 1e-3
+    assert 100.0 < rate < 130.0
+    assert v0 * rate == pytest.approx(profile.curvature_rate, rel=1e-3)
+
+
+def test_the_ends_of_a_coarsely_sampled_path_are_measured_by_their_arc_length():
+    """On a 10 km path (samples 0.5 m apart) s is the arc length near its ends too."""
+    # The summed chord of the samples is the arc length to a few parts in a million.
+    traj = PathTrajectory.from_points([(0.0, 0.0), (1.0, 0.0), (1.0, 10000.0),
+                                       (2.0, 10000.0)])
+    for a, b in ((0.0, 5.0), (0.0, 10.0), (traj.length - 5.0, traj.length),
+                 (traj.length - 10.0, traj.length)):
+        x, y, _, _ = traj.geometry(np.linspace(a, b, 200001))
+        assert np.hypot(np.diff(x), np.diff(y)).sum() == pytest.approx(b - a, abs=1e-5)
