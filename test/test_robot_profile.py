@@ -138,7 +138,8 @@ def test_profile_options_are_validated_with_their_names():
             r"vectorises the paper's law only, and this one sets outer.linear_zone = 0.02, "
             r"inner.boundary_layer = 0.02, inner.eta_max = 0.5, thetadot_source = 'analytic', "
             r'omega_filter = 0.01, align_speed = True, steer_rate_limit = 20.0, '
-            r'odom_position_noise = 0.001, odom_yaw_noise = 0.001: run it robot by robot')):
+            r'steer_lead_zone = 0.01, odom_position_noise = 0.001, odom_yaw_noise = 0.001: '
+            r'run it robot by robot')):
         simulate_batch(robot_params().dlsmc, make_trajectory('sine'), [(1.0, 4.0, 0.0)], 1.0)
     assert DlsmcConfig().is_paper_law and not DlsmcConfig(align_speed=True).is_paper_law
     assert DlsmcConfig().robot_options == {}

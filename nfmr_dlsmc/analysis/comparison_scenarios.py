@@ -12,6 +12,7 @@ import math
 from nfmr_dlsmc.baselines.registry import build_controller
 from nfmr_dlsmc.core.arrival import ArrivalConfig, with_arrival
 from nfmr_dlsmc.core.disturbances import paper_disturbance, YawRateDisturbance
+from nfmr_dlsmc.core.dlsmc import DlsmcController
 from nfmr_dlsmc.core.gains import DlsmcConfig
 from nfmr_dlsmc.core.pose_estimator import EstimatorConfig
 from nfmr_dlsmc.core.sensing import with_controller_sensing, with_sensing
@@ -123,8 +124,10 @@ def run_scenario(name: str, block: dict | None, scenario: Scenario,
         flat = {} if sensing is None else with_sensing({}, sensing) | {
             'disturbance.seed': scenario.odom_seed}
         settings = plant_.settings(flat if steering is None else with_steering(flat, steering))
+        # The session leads the steer set points as the law's own options say (D41).
+        dlsmc = law.config if isinstance(law, DlsmcController) else DlsmcConfig(dt=scenario.dt)
         params = ControllerParams(
-            dlsmc=DlsmcConfig(dt=scenario.dt), trajectory=trajectory, arrival=scenario.arrival,
+            dlsmc=dlsmc, trajectory=trajectory, arrival=scenario.arrival,
             estimator=EstimatorConfig() if sensing is None else robot_estimator(),
             fusion=controller_params(with_controller_sensing({}, sensing)).fusion)
         return plant_.simulate(TrackingSession(params, **session_options({}), law=law),

@@ -72,7 +72,7 @@ _SINGLE_LOOP = {
 _DLSMC_NAMES = ('dlsmc', 'dlsmc_robot')
 _DLSMC_OPTIONS = ('thetadot_source', 'thetadot_filter', 'omega_filter', 'omega_filter_band',
                   'align_speed', 'steer_lag', 'steer_lag_layer', 'steer_rate_limit',
-                  'steer_rate_zone', 'odom_position_noise', 'odom_yaw_noise',
+                  'steer_rate_zone', 'steer_lead_zone', 'odom_position_noise', 'odom_yaw_noise',
                   'odom_noise_zone', 'odom_noise_eps')
 
 # name -> ((outer loop, its gains), (inner loop, its gains))
@@ -138,7 +138,8 @@ def build_controller(name: str, block: dict | None = None, limits: InputLimits |
         "inner": {...}}`` for a cascade; the DLSMC's (``dlsmc``, ``dlsmc_robot``) may also
         set ``thetadot_source``, ``thetadot_filter`` [s], ``omega_filter`` [s],
         ``omega_filter_band`` [rad], ``align_speed``, the declared steering (``steer_lag``
-        [s], ``steer_lag_layer``, ``steer_rate_limit`` [rad/s], ``steer_rate_zone``) and
+        [s], ``steer_lag_layer``, ``steer_rate_limit`` [rad/s], ``steer_rate_zone``,
+        ``steer_lead_zone`` [m]) and
         odometry noise (``odom_position_noise`` [m], ``odom_yaw_noise`` [rad],
         ``odom_noise_zone``, ``odom_noise_eps``; :class:`DlsmcConfig`).
     limits : InputLimits, optional

@@ -228,6 +228,13 @@ class DlsmcConfig:
     steer_rate_zone: float = param(0.6, 'm rad^2/s^2', 'the least linear zone of alpha(e) '
                                    'times the square of the declared steer_rate_limit',
                                    POSITIVE)
+    steer_lead_zone: float = param(0.0, 'm', 'robot option: with a declared steer_lag, the '
+                                   'steer set points lead the mapped angles by steer_lag times '
+                                   'their rate, low-passed over steer_lag, while the robot is '
+                                   'within this distance of the reference, fading linearly to '
+                                   'no lead at it, so that the servo turns the wheels when the '
+                                   'law wants them turned (doc/design.md, D41; nonholonomic '
+                                   'motion; 0: no lead, the paper)', NON_NEGATIVE)
     odom_position_noise: float = param(0.0, 'm', 'robot option: the standard deviation of '
                                        "the odometry's position noise, as declared; the outer "
                                        "loop's linear zone is then at least odom_noise_zone "
@@ -281,6 +288,7 @@ class DlsmcConfig:
                   'inner.eta_max': self.inner.eta_max, 'thetadot_source': self.thetadot_source,
                   'omega_filter': self.omega_filter, 'align_speed': self.align_speed,
                   'steer_lag': self.steer_lag, 'steer_rate_limit': self.steer_rate_limit,
+                  'steer_lead_zone': self.steer_lead_zone,
                   'odom_position_noise': self.odom_position_noise,
                   'odom_yaw_noise': self.odom_yaw_noise}
         paper = {'thetadot_source': 'difference', 'align_speed': False}

@@ -30,6 +30,7 @@ from nfmr_dlsmc.core.free_icr import FreeIcrController, motion_controller
 from nfmr_dlsmc.core.heading_reference import heading_reference
 from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
 from nfmr_dlsmc.core.pose_estimator import PoseEstimator
+from nfmr_dlsmc.core.steer_lead import SteerLead
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
 from nfmr_dlsmc.core.trajectories import reference_heading
@@ -221,6 +222,10 @@ class TrackingSession:
         self._measured_steer = None  # steer angles [rad] measured last (free_icr)
         self._aligning = False  # the wheel mapping's stop-align-drive state (free_icr)
         self._wanted = None  # the steer angles [rad] the mapping wanted last (free_icr)
+        # The set points' lead over the declared servo lag (D41) and the angles the mapping
+        # gave last, before the lead (nonholonomic).
+        self._lead = SteerLead(params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone)
+        self._mapped = None
         self._psi_d = math.nan  # the heading reference [rad] of the last tick (free_icr)
         self._branches = self._branch_plan(params)  # each wheel's branch (free_icr)
         self._v = 0.0  # speed [m/s] last commanded
@@ -246,6 +251,9 @@ class TrackingSession:
             params = replace(params, trajectory=self.params.trajectory, trajectory_name=PATH)
         if params.swerve != self.params.swerve:
             self._branches = self._branch_plan(params)
+        if (params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone) != \
+                (self.params.dlsmc.steer_lag, self.params.dlsmc.steer_lead_zone):
+            self._lead = SteerLead(params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone)
         self.params = params
         self.law.config = params.dlsmc
         if self.estimator is not None:
@@ -480,6 +488,8 @@ class TrackingSession:
         self._t = 0.0
         self._tracked_last = False
         self._aligning = False
+        self._lead.reset()
+        self._mapped = None
         if self._branches is not None:
             self._branches.reset()
         self._restart_pending = True
@@ -683,16 +693,23 @@ class TrackingSession:
         Return (v, omega, steer, wheel speeds, steer limited) of the tick.
 
         Stopped by ``fault``: zero speed, the steering held; else the law's step over
-        ``step`` [s] (None: nominal) mapped to the wheels. The estimator learns the command.
+        ``step`` [s] (None: nominal) mapped to the wheels, the set points led over the
+        declared steer lag (:class:`~nfmr_dlsmc.core.steer_lead.SteerLead`, D41). The
+        estimator learns the command.
         """
         if fault:
             v = omega = 0.0
             steer, wheels, limited = self._steer.copy(), np.zeros(4), False
+            self._lead.reset()
+            self._mapped = None
         else:
             v, omega = self.controller.step(*pose, *reference[:4], step, *reference[4:])
+            hold = self._steer if self._mapped is None else self._mapped
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
-                                 hold_steer=self._steer)
-            steer, wheels, limited = cmd.steer, cmd.wheel_speed, cmd.limited
+                                 hold_steer=hold)
+            wheels, limited, self._mapped = cmd.wheel_speed, cmd.limited, cmd.steer
+            steer = self._lead.step(cmd.steer, self.params.dlsmc.dt if step is None else step,
+                                    math.hypot(pose[0] - reference[0], pose[1] - reference[1]))
             self._steer = steer
         self._v = v
         if self.estimator is not None:
