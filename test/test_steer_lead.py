@@ -54,7 +54,7 @@ def test_the_lead_fades_linearly_to_none_at_the_zone():
 def test_a_jump_of_the_mapping_adds_nothing_to_the_rate():
     # A wheel turned to its other branch (or held at rest) jumps by more than max_step in
     # one step: no rate, so no lead; a change of max_step itself is a rate.
-    lead = SteerLead(0.05, 0.01, max_step=0.2)
+    lead = SteerLead(0.05, 0.01)  # max_step 0.2 rad by default
     lead.step(np.zeros(4), DT, 0.0)
     jumped = np.array([0.25, -0.25, 0.2, -0.2])
     out = lead.step(jumped, DT, 0.0)
@@ -97,3 +97,13 @@ def test_the_lead_zone_is_a_robot_option_and_a_negative_one_names_the_parameter(
     for bad in (-0.01, math.nan, math.inf):
         with pytest.raises(ParameterError, match=r'steer_lead_zone'):
             DlsmcConfig(steer_lead_zone=bad)
+
+
+def test_integer_angles_give_float_set_points_and_a_step_of_no_time_leads_by_nothing():
+    lead = SteerLead(0.05, 0.01)
+    first = lead.step(np.array([0, 1, 0, -1]), DT, 0.0)
+    assert first.dtype == np.float64
+    _ramp(lead, 0.5, 100)
+    angles = np.array([0.2, 0.2, -0.2, -0.2])
+    with np.errstate(all='raise'):
+        np.testing.assert_array_equal(lead.step(angles, 0.0, 0.0), angles)

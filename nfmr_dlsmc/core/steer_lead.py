@@ -59,9 +59,9 @@ class SteerLead:
         """
         Return the set points [rad] for the mapped ``angles`` [rad] after ``dt`` [s].
 
-        ``distance`` [m] is the robot's distance from the reference, which fades the lead
-        (module docstring). The first step after construction or :meth:`reset` leads by
-        nothing.
+        ``distance`` [m] (>= 0) is the robot's distance from the reference, which fades the
+        lead (module docstring). The first step after construction or :meth:`reset`, and a
+        step of no time, lead by nothing.
         """
         angles = np.asarray(angles, dtype=float)
         previous, self._previous = self._previous, angles.copy()
@@ -70,5 +70,5 @@ class SteerLead:
         change = angles - previous
         rate = np.where(np.abs(change) <= self.max_step, change / dt, 0.0)
         self._rate = self._rate + dt / (self.lag + dt) * (rate - self._rate)
-        weight = min(max(1.0 - distance / self.zone, 0.0), 1.0)
+        weight = max(1.0 - distance / self.zone, 0.0)  # distance >= 0: at most 1
         return angles + weight * self.lag * self._rate
