@@ -33,6 +33,9 @@ class SteerLead:
     zone : float
         The distance [m] from the reference within which the lead acts, in full at 0
         and fading linearly to none at ``zone`` (``steer_lead_zone``); 0: no lead.
+    limit : float
+        The steer joints' range [rad] (``geometry.steer_limit``): a set point led beyond
+        +-limit is held at it, as the mapping holds the angles it maps.
     max_step : float
         A change of a wheel's mapped angle by more than this [rad] in one step is a jump
         of the mapping (a wheel turned to the other branch, the angle held at rest), not a
@@ -40,8 +43,9 @@ class SteerLead:
 
     """
 
-    def __init__(self, lag: float, zone: float, max_step: float = 0.2):
-        self.lag, self.zone, self.max_step = float(lag), float(zone), float(max_step)
+    def __init__(self, lag: float, zone: float, limit: float, max_step: float = 0.2):
+        self.lag, self.zone, self.limit = float(lag), float(zone), float(limit)
+        self.max_step = float(max_step)
         self._previous = None  # the mapped angles [rad] of the last step
         self._rate = np.zeros(4)  # the low-passed rate r of each wheel's angle [rad/s]
 
@@ -71,4 +75,4 @@ class SteerLead:
         rate = np.where(np.abs(change) <= self.max_step, change / dt, 0.0)
         self._rate = self._rate + dt / (self.lag + dt) * (rate - self._rate)
         weight = max(1.0 - distance / self.zone, 0.0)  # distance >= 0: at most 1
-        return angles + weight * self.lag * self._rate
+        return np.clip(angles + weight * self.lag * self._rate, -self.limit, self.limit)

@@ -143,6 +143,16 @@ def _law_state(law) -> dict:
 UNWIND_LOOK = 120.0
 
 
+def _lead_settings(params: ControllerParams) -> tuple:
+    """Return what the set points' lead depends on: lag [s], zone [m], steer limit [rad]."""
+    return params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone, params.geometry.steer_limit
+
+
+def _steer_lead(params: ControllerParams) -> SteerLead:
+    """Return the set points' lead over the declared steer lag of ``params`` (D41)."""
+    return SteerLead(*_lead_settings(params))
+
+
 def unwind_note(params: ControllerParams, duration: float | None = None) -> str | None:
     """
     Return a line on the stops the wheels make to unwind along the reference (None: none).
@@ -224,7 +234,7 @@ class TrackingSession:
         self._wanted = None  # the steer angles [rad] the mapping wanted last (free_icr)
         # The set points' lead over the declared servo lag (D41) and the angles the mapping
         # gave last, before the lead (nonholonomic).
-        self._lead = SteerLead(params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone)
+        self._lead = _steer_lead(params)
         self._mapped = None
         self._psi_d = math.nan  # the heading reference [rad] of the last tick (free_icr)
         self._branches = self._branch_plan(params)  # each wheel's branch (free_icr)
@@ -251,9 +261,8 @@ class TrackingSession:
             params = replace(params, trajectory=self.params.trajectory, trajectory_name=PATH)
         if params.swerve != self.params.swerve:
             self._branches = self._branch_plan(params)
-        if (params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone) != \
-                (self.params.dlsmc.steer_lag, self.params.dlsmc.steer_lead_zone):
-            self._lead = SteerLead(params.dlsmc.steer_lag, params.dlsmc.steer_lead_zone)
+        if _lead_settings(params) != _lead_settings(self.params):
+            self._lead = _steer_lead(params)
         self.params = params
         self.law.config = params.dlsmc
         if self.estimator is not None:
