@@ -121,3 +121,15 @@ def test_a_set_point_led_beyond_the_steer_joints_range_is_held_at_it():
         out = lead.step(angles * (k / steps), DT, 0.0)
     np.testing.assert_array_equal(out[:2], [1.0, -1.0])
     assert np.all(np.abs(out[2:]) < 1.0) and np.all(np.abs(out[2:]) > 0.5)
+
+
+def test_the_mapped_angles_of_the_last_step_are_kept_before_the_lead():
+    lead = SteerLead(0.05, 0.01, LIMIT)
+    assert lead.mapped is None
+    angles = np.array([0.1, 0.2, -0.1, -0.2])
+    lead.step(angles, DT, 0.0)
+    out = lead.step(angles + 1e-3, DT, 0.0)
+    np.testing.assert_array_equal(lead.mapped, angles + 1e-3)
+    assert np.all(out > lead.mapped)
+    lead.reset()
+    assert lead.mapped is None

@@ -50,6 +50,11 @@ class SteerLead:
         self._rate = np.zeros(4)  # the low-passed rate r of each wheel's angle [rad/s]
 
     @property
+    def mapped(self) -> np.ndarray | None:
+        """Return the mapped angles [rad] of the last step, before the lead (None: none)."""
+        return self._previous
+
+    @property
     def enabled(self) -> bool:
         """Tell whether the set points lead at all (a lag and a zone declared)."""
         return self.lag > 0.0 and self.zone > 0.0

@@ -232,10 +232,8 @@ class TrackingSession:
         self._measured_steer = None  # steer angles [rad] measured last (free_icr)
         self._aligning = False  # the wheel mapping's stop-align-drive state (free_icr)
         self._wanted = None  # the steer angles [rad] the mapping wanted last (free_icr)
-        # The set points' lead over the declared servo lag (D41) and the angles the mapping
-        # gave last, before the lead (nonholonomic).
+        # The set points' lead over the declared servo lag (D41; nonholonomic).
         self._lead = _steer_lead(params)
-        self._mapped = None
         self._psi_d = math.nan  # the heading reference [rad] of the last tick (free_icr)
         self._branches = self._branch_plan(params)  # each wheel's branch (free_icr)
         self._v = 0.0  # speed [m/s] last commanded
@@ -498,7 +496,6 @@ class TrackingSession:
         self._tracked_last = False
         self._aligning = False
         self._lead.reset()
-        self._mapped = None
         if self._branches is not None:
             self._branches.reset()
         self._restart_pending = True
@@ -710,13 +707,12 @@ class TrackingSession:
             v = omega = 0.0
             steer, wheels, limited = self._steer.copy(), np.zeros(4), False
             self._lead.reset()
-            self._mapped = None
         else:
             v, omega = self.controller.step(*pose, *reference[:4], step, *reference[4:])
-            hold = self._steer if self._mapped is None else self._mapped
+            hold = self._steer if self._lead.mapped is None else self._lead.mapped
             cmd = wheel_commands(v, omega, self.params.geometry, self.params.steering,
                                  hold_steer=hold)
-            wheels, limited, self._mapped = cmd.wheel_speed, cmd.limited, cmd.steer
+            wheels, limited = cmd.wheel_speed, cmd.limited
             steer = self._lead.step(cmd.steer, self.params.dlsmc.dt if step is None else step,
                                     math.hypot(pose[0] - reference[0], pose[1] - reference[1]))
             self._steer = steer
