@@ -2,7 +2,7 @@
 
 import math
 
-from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator
+from nfmr_dlsmc.core.pose_estimator import EstimatorConfig, PoseEstimator, speed_bias_compensated
 from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 import pytest
@@ -253,6 +253,64 @@ def test_bad_settings_name_the_parameter(name, value):
     with pytest.raises(ParameterError) as info:
         EstimatorConfig(**{name: value})
     assert info.value.parameter == f'estimator.{name}'
+
+
+def test_the_feed_forward_of_the_speed_bias_needs_the_bias_along_the_motion():
+    # D42: the command is changed along its own direction, where only `motion` puts b.
+    with pytest.raises(ParameterError) as info:
+        EstimatorConfig(speed_bias_feedforward=0.25)
+    assert info.value.parameter == 'estimator.speed_bias_feedforward'
+    assert 'speed_bias_along heading' in str(info.value)
+    with pytest.raises(ParameterError, match='speed_bias_feedforward'):
+        EstimatorConfig(speed_bias_feedforward=-0.1, speed_bias_along='motion')
+    assert EstimatorConfig(speed_bias_feedforward=0.25,
+                           speed_bias_along='motion').speed_bias_feedforward == 0.25
+
+
+# -- the feed-forward of the speed bias (D42) -------------------------------------------------
+
+@pytest.mark.parametrize('v_x, v_y', [(0.2, 0.0), (0.1, 0.17), (-0.05, -0.3)])
+@pytest.mark.parametrize('bias', [-0.028, 0.01, -0.5, 0.5])
+def test_the_command_is_the_law_velocity_less_the_bias_within_its_share(v_x, v_y, bias):
+    share = 0.25
+    c_x, c_y = speed_bias_compensated(v_x, v_y, bias, share)
+    speed, commanded = math.hypot(v_x, v_y), math.hypot(c_x, c_y)
+    assert math.atan2(c_y, c_x) == pytest.approx(math.atan2(v_y, v_x), abs=1e-12)  # kept
+    if abs(bias) <= share * speed:  # the chassis, at the command plus b, moves at |v|
+        assert commanded + bias == pytest.approx(speed, abs=1e-12)
+    else:  # at most a quarter of the law's speed
+        assert commanded == pytest.approx(speed * (1 - math.copysign(share, bias)), abs=1e-12)
+
+
+@pytest.mark.parametrize('v_x, v_y, bias, share',
+                         [(0.0, 0.0, -0.03, 0.25), (0.2, 0.1, -0.03, 0.0)])
+def test_at_rest_or_off_the_command_is_the_law_velocity(v_x, v_y, bias, share):
+    assert speed_bias_compensated(v_x, v_y, bias, share) == (v_x, v_y)
+
+
+def test_the_chassis_missing_a_speed_moves_at_the_law_velocity_with_the_feed_forward():
+    # A chassis that keeps 0.028 m/s below any commanded speed along its motion, exact
+    # odometry every 10 ms: the estimator learns the bias and the command makes it up.
+    config = EstimatorConfig(enabled=True, speed_bias_walk=0.03, speed_bias_along='motion',
+                             position_walk=3e-5, yaw_walk=3e-5, speed_bias_feedforward=0.25)
+    estimator, dt, miss = PoseEstimator(config), 0.001, 0.028
+    law = (0.1, 0.17)  # [m/s] body frame, the chassis facing +y
+    x = y = 0.0
+    moved = []
+    for k in range(3000):
+        t = k * dt
+        if k % 10 == 0:
+            estimator.measure(t, x, y, math.pi / 2, (1e-4, 1e-4))
+        estimator.pose(t)
+        c_x, c_y = speed_bias_compensated(*law, estimator.bias[0], 0.25)
+        estimator.command(c_x, 0.0, c_y)
+        speed = math.hypot(c_x, c_y) - miss
+        x, y = (x - speed * c_y / math.hypot(c_x, c_y) * dt,
+                y + speed * c_x / math.hypot(c_x, c_y) * dt)
+        moved.append((x, y))
+    (x0, y0), (x1, y1) = moved[-1001], moved[-1]
+    assert estimator.bias[0] == pytest.approx(-miss, abs=1e-3)
+    assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(math.hypot(*law), rel=0.01)
 
 
 # -- the filter's equations, one at a time --------------------------------------------------

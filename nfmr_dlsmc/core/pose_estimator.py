@@ -30,9 +30,10 @@ from nfmr_dlsmc.core.schema import (
     param,
     POSITIVE,
 )
+from nfmr_dlsmc.core.validation import ParameterError
 import numpy as np
 
-__all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR']
+__all__ = ['EstimatorConfig', 'PoseEstimator', 'SIGMA_FLOOR', 'speed_bias_compensated']
 
 #: The state: x [m], y [m], theta [rad], speed bias [m/s], yaw-rate bias [rad/s].
 _N = 5
@@ -82,6 +83,13 @@ class EstimatorConfig:
                                   'body x axis; motion, along the commanded direction of '
                                   'motion, sideways in a crab (D40); the unicycle moves along '
                                   'its heading either way', one_of('heading', 'motion'))
+    speed_bias_feedforward: float = param(0.0, '', 'a free-ICR command moves the centre '
+                                          'at the speed the law asks for less the '
+                                          'estimated speed bias, by at most this share of '
+                                          'that speed: the speed the chassis keeps missing '
+                                          'is commanded in advance instead of closed by the '
+                                          'position loop (D42; 0: off; the unicycle is '
+                                          'never changed)', NON_NEGATIVE)
     yaw_rate_bias_walk: float = param(0.0, 'rad/s/sqrt(s)', 'random walk of the yaw rate '
                                       'against the commanded omega, estimated as a state '
                                       '(0: the commanded omega is taken as it is)',
@@ -104,6 +112,32 @@ class EstimatorConfig:
 
     def __post_init__(self):
         check_fields(self)
+        if self.speed_bias_feedforward > 0.0 and self.speed_bias_along != 'motion':
+            raise ParameterError(f'{self.prefix}.speed_bias_feedforward',
+                                 self.speed_bias_feedforward,
+                                 f'must be 0 with {self.prefix}.speed_bias_along '
+                                 f'{self.speed_bias_along}: the command is changed along its '
+                                 'own direction, where the bias acts only with motion')
+
+
+def speed_bias_compensated(v_x: float, v_y: float, bias: float,
+                           share: float) -> tuple[float, float]:
+    """
+    Return the velocity [m/s] to command so that the chassis moves at (v_x, v_y) (D42).
+
+    The estimator predicts a free-ICR chassis at the commanded velocity plus the speed bias
+    ``bias`` b [m/s] along the command's direction (``speed_bias_along`` motion), so the
+    command that makes it move at v is v less b, the direction kept; changed by at most
+    the share a = ``share`` of the speed, so that a bias learned at one speed never turns
+    a small correction into a large one:
+
+        v' = v (1 + clip(-b / |v|, -a, a)),   v' = v at rest or with a = 0.       (D42)
+    """
+    speed = math.hypot(v_x, v_y)
+    if share <= 0.0 or speed == 0.0:
+        return v_x, v_y
+    gain = 1.0 + min(max(-bias / speed, -share), share)
+    return v_x * gain, v_y * gain
 
 
 class _Tick:

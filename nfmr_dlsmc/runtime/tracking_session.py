@@ -29,7 +29,7 @@ from nfmr_dlsmc.core.fix_fusion import FixFusion, FixVerdict
 from nfmr_dlsmc.core.free_icr import FreeIcrController, motion_controller
 from nfmr_dlsmc.core.heading_reference import heading_reference
 from nfmr_dlsmc.core.path_reference import PathError, PathTrajectory
-from nfmr_dlsmc.core.pose_estimator import PoseEstimator
+from nfmr_dlsmc.core.pose_estimator import PoseEstimator, speed_bias_compensated
 from nfmr_dlsmc.core.steer_lead import SteerLead
 from nfmr_dlsmc.core.steering import wheel_commands
 from nfmr_dlsmc.core.swerve_kinematics import swerve_commands
@@ -604,6 +604,10 @@ class TrackingSession:
         else:
             v_x, v_y, omega = self.controller.step(*pose, *reference[:4], psi_d, psidot_d,
                                                    step)
+            if self.estimator is not None:  # the speed the chassis misses, in advance
+                v_x, v_y = speed_bias_compensated(
+                    v_x, v_y, self.estimator.bias[0],
+                    self.params.estimator.speed_bias_feedforward)
             current = self._steer if self._measured_steer is None else self._measured_steer
             near = self._anchors(t, psi_d, psidot_d, reference, current)
             hold = self._angles_ahead(t, psi_d, current, near)
