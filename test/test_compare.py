@@ -82,16 +82,37 @@ def test_the_robot_profile_is_not_tuned_and_keeps_the_tuning_seeds():
         'btintsmc_ntsmc', 'pure_pursuit', 'stanley', 'kanayama')
 
 
-def test_tuning_candidates_are_seeded_within_range_and_start_at_the_defaults():
-    first = baseline_tuning.candidates('dntsmc', 20, seed=3)
-    again = baseline_tuning.candidates('dntsmc', 20, seed=3)
-    other = baseline_tuning.candidates('dntsmc', 20, seed=4)
+@pytest.mark.parametrize('name', ['dntsmc', 'free_icr_pd'])
+def test_tuning_candidates_are_seeded_within_range_and_start_at_the_defaults(name):
+    first = baseline_tuning.candidates(name, 20, seed=3)
+    again = baseline_tuning.candidates(name, 20, seed=3)
+    other = baseline_tuning.candidates(name, 20, seed=4)
     assert first == again and first != other
     assert first[0] == {} and len(first) == 20
     for block in first[1:]:
-        for (section, gain), (low, high) in baseline_tuning.SEARCH_SPACES['dntsmc'].items():
-            assert low <= block[section][gain] <= high
-        build_controller('dntsmc', block)  # every candidate is a valid gain set
+        for (section, gain), (low, high) in baseline_tuning.SEARCH_SPACES[name].items():
+            assert low <= (block[section] if section else block)[gain] <= high
+        build_controller(name, block)  # every candidate is a valid gain set
+
+
+@pytest.mark.sim
+def test_the_free_icr_pd_is_scored_on_the_chassis_as_nfmr_eval_runs_it():
+    # The docking path of robot_free_icr.yaml with good odometry: the IAE of the run that
+    # `nfmr-eval --plant pybullet --params config/robot_free_icr.yaml --controller
+    # free_icr_pd --sensing good` makes, with the block's gains.
+    from nfmr_dlsmc.analysis.evaluation import load_evaluation, plant_run
+
+    block = {'kp_pos': 4.0}
+    ev = load_evaluation('pybullet', 'free_icr_pd', None, None, 'none',
+                         shipped_config('robot_free_icr.yaml'), sensing='good')
+    law = build_controller('free_icr_pd', block, ev.params.dlsmc.limits, ev.params.dlsmc.dt)
+    run = plant_run(ev.plant, law, ev.params, ev.trajectory, ev.x0, ev.duration, ev.world,
+                    encoders=ev.encoders)
+    assert 'chassis' in baseline_tuning.objective_name('free_icr_pd')
+    assert baseline_tuning.score('free_icr_pd', block) == pytest.approx(
+        np.sum(run.distance_error) * run.dt)
+    assert baseline_tuning.score('free_icr_pd', {}) != pytest.approx(
+        np.sum(run.distance_error) * run.dt)  # the gains are the block's
 
 
 @pytest.mark.long
@@ -105,13 +126,17 @@ def test_shipped_gains_record_their_search():
     import yaml
 
     document = yaml.safe_load(shipped_config('comparison.yaml').read_text())
-    assert set(document['controllers']) == set(CONTROLLER_NAMES)
+    assert set(document['controllers']) == set(baseline_tuning.GAIN_BLOCKS)
     assert document['controllers']['dlsmc'] == {}
     record = document['tuning']['results']
     assert set(record) == set(baseline_tuning.TUNED)
     for name in baseline_tuning.TUNED:
         best = record[name]['best']
         assert record[name]['defaults'] == 'diverged' or best <= record[name]['defaults']
+        assert record[name]['objective'] == baseline_tuning.objective_name(name)
+        assert record[name]['command'] == (
+            f"nfmr-tune-baselines --budget {record[name]['budget']} "
+            f"--seed {record[name]['seed']} --controllers {name}")
 
 
 def _document(case1_iae: dict, case1_std: dict) -> dict:
@@ -346,17 +371,44 @@ def test_compare_rejects_a_bad_gains_file(tmp_path, capsys):
     assert not (tmp_path / 'r').exists()
 
 
-def test_retuning_keeps_the_untuned_robot_profile_block(tmp_path):
+def test_retuning_one_law_keeps_every_other_block_and_its_record(tmp_path):
+    import yaml
+
     path = tmp_path / 'comparison.yaml'
     path.write_text(shipped_config('comparison.yaml').read_text())
     shipped = load_gain_blocks(path)
+    before = yaml.safe_load(path.read_text())['tuning']['results']
     tuned_pid = {'v_c': 0.5, 'kp': 1.0, 'ki': 0.1, 'kd': 0.01, 'k_theta': 0.2}
-    baseline_tuning.write_gains_file(path, {'pid': (tuned_pid, 1.0, 2.0)}, 3, 0,
-                                     'nfmr-tune-baselines')
+    baseline_tuning.write_gains_file(path, {'pid': (tuned_pid, 1.0, 2.0)}, 3, 7)
     written = load_gain_blocks(path)
-    assert written['dlsmc_robot'] == shipped['dlsmc_robot']
     assert written['pid'] == tuned_pid and written['dlsmc'] == {}
-    assert 'csmc' not in written  # tuned blocks come only from this search
+    for name in set(shipped) - {'pid'}:  # the robot profile, the other tuned laws
+        assert written[name] == shipped[name], name
+    record = yaml.safe_load(path.read_text())['tuning']['results']
+    assert record['pid'] == {'objective': baseline_tuning.objective_name('pid'), 'best': 1.0,
+                             'defaults': 2.0, 'budget': 3, 'seed': 7,
+                             'command': 'nfmr-tune-baselines --budget 3 --seed 7 '
+                                        '--controllers pid'}
+    assert before['csmc'].items() <= record['csmc'].items()
+    assert record['csmc']['command'].endswith('--controllers csmc')
+
+
+def test_a_gains_file_of_the_first_layout_gives_its_records_their_search(tmp_path):
+    # Before the free-ICR law, one budget and seed for the whole file, no commands.
+    import yaml
+
+    path = tmp_path / 'comparison.yaml'
+    path.write_text(yaml.safe_dump({
+        'controllers': {'dlsmc': {}, 'kanayama': {'k_x': 2.0}},
+        'tuning': {'budget': 60, 'seed': 0, 'method': 'random search',
+                   'results': {'kanayama': {'objective': 'o', 'best': 1.0, 'defaults': 2.0}}}}))
+    baseline_tuning.write_gains_file(path, {'stanley': ({'k': 2.0}, 3.0, 4.0)}, 5, 1)
+    document = yaml.safe_load(path.read_text())
+    assert document['controllers']['kanayama'] == {'k_x': 2.0}
+    assert document['tuning']['results']['kanayama'] == {
+        'budget': 60, 'seed': 0, 'objective': 'o', 'best': 1.0, 'defaults': 2.0,
+        'command': 'nfmr-tune-baselines --budget 60 --seed 0 --controllers kanayama'}
+    assert document['tuning']['results']['stanley']['command'].endswith('--controllers stanley')
 
 
 @pytest.mark.long

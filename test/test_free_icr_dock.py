@@ -7,9 +7,9 @@ declared. The issue's targets, on `good` odometry (100 Hz, 10 ms late, 1 mm / 1 
 within 5 mm and 10 mrad of the goal, p99 3 mm and 5 mrad after the first second, better
 than the PD with feed-forward. Measured (in process, `nfmr-eval --plant pybullet --params
 config/robot_free_icr.yaml --sensing good --hold-from 1`): distance p99 1.97 mm, heading p99
-0.21 mrad, arrived 1.47 mm from the goal; the PD 3.17 mm. Without the feed-forward of the
-speed bias (D42) the DLSMC held 7.70 mm: the chassis keeps 14 % below the commanded speed
-in the corner, and the estimate ran ahead of it.
+0.21 mrad, arrived 1.47 mm from the goal; the PD, tuned on this path, 2.24 mm. Without the
+feed-forward of the speed bias (D42) the DLSMC held 7.70 mm: the chassis keeps 14 % below
+the commanded speed in the corner, and the estimate ran ahead of it.
 """
 
 from pathlib import Path
@@ -108,7 +108,7 @@ def test_a_crab_along_the_lemniscate_facing_y_holds_it_and_beats_the_pd():
     Its directions sweep 3 pi / 2 within the +-pi joints on one branch: planned
     (``swerve.branch_horizon``), the wheels never stop to unwind. The issue's targets, on
     `good` odometry: 3 mm and 5 mrad, better than the PD with feed-forward. Measured, from
-    15 s: distance p99 1.41 mm, heading p99 0.24 mrad; the PD 1.65 mm (8.69 mm and 12.9 mm
+    15 s: distance p99 1.41 mm, heading p99 0.24 mrad; the tuned PD 1.43 mm (8.69 mm and 12.9 mm
     before the speed bias acted along the motion and was fed forward, D40 and D42).
     """
     scenario = {'trajectory': 'lemniscate', 'x0': (1.0, -1.0, 0.5), 'duration': 60.0,
