@@ -465,6 +465,16 @@ def test_each_node_ends_at_once_on_a_signal_while_they_run_together(sig):
                 proc.kill()
 
 
+def _answered(predicate, seconds: float) -> bool:
+    """Poll ``predicate`` for up to ``seconds``; return whether it came true."""
+    deadline = time.monotonic() + seconds
+    while not predicate():
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
     """Ctrl-C or SIGTERM of a controller that is driving: its shutdown commands zero speed."""
@@ -493,6 +503,12 @@ def test_a_signal_stops_a_tracking_controller_with_a_zero_command(sig):
             msg.pose.pose.orientation.w = 1.0
             n = len(replies)
             odom.publish(msg)
+            if k == 1:  # the controller activates itself once up and takes no odometry
+                # before: the first message is sent again until it answers
+                deadline = time.monotonic() + 60.0
+                while not _answered(lambda: len(replies) > n, 0.5):
+                    assert time.monotonic() < deadline, 'no reply within 60 s'
+                    odom.publish(msg)
             wait_for(lambda: len(replies) > n, timeout=5, what='a reply')
         assert replies[-1][1] > 0.1
         n = len(replies)
